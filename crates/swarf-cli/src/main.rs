@@ -1,0 +1,406 @@
+//! The `swarf` command: a thin layer over the `swarf` library.
+
+use anyhow::Context;
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use swarf::io::Overrides;
+use swarf::model::Width;
+use swarf::pipeline::{RoughOptions, RoughResult, Stage};
+use swarf::post::Post;
+use swarf::strategy::{OffsetOrder, Params, StrategyKind};
+
+/// swarf: CNC roughing toolpaths you can trust.
+#[derive(Parser)]
+#[command(name = "swarf", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Rough a job (case JSON, DXF or SVG): write G-code, and optionally a report and pictures.
+    Rough(RoughArgs),
+    /// Run the built-in example (a pocket with two islands) and write everything into a folder.
+    Demo {
+        /// Output folder.
+        #[arg(default_value = "swarf-demo")]
+        out_dir: PathBuf,
+        #[command(flatten)]
+        opts: CommonOpts,
+    },
+}
+
+#[derive(Copy, Clone, PartialEq, Eq, ValueEnum)]
+enum StrategyArg {
+    Offset,
+    Zigzag,
+}
+
+#[derive(Copy, Clone, PartialEq, Eq, ValueEnum)]
+enum PostArg {
+    Linuxcnc,
+    Grbl,
+}
+
+#[derive(Copy, Clone, PartialEq, Eq, ValueEnum)]
+enum OrderArg {
+    InsideOut,
+    OutsideIn,
+}
+
+#[derive(Copy, Clone, PartialEq, Eq, ValueEnum)]
+enum UnitsArg {
+    Mm,
+    In,
+    Cm,
+    M,
+}
+
+#[derive(Args, Clone)]
+struct CommonOpts {
+    /// Clearing strategy.
+    #[arg(long, value_enum, default_value = "offset")]
+    strategy: StrategyArg,
+    /// Tool diameter, mm (overrides the input).
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    tool_diameter: Option<f64>,
+    /// Width of cut as the engagement angle of a straight cut, degrees.
+    #[arg(long, value_name = "DEG", conflicts_with = "stepover", allow_negative_numbers = true)]
+    engagement: Option<f64>,
+    /// Width of cut as a fraction of the tool diameter, in (0, 1].
+    #[arg(long, value_name = "FRACTION", allow_negative_numbers = true)]
+    stepover: Option<f64>,
+    /// Largest depth per level, mm.
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    stepdown: Option<f64>,
+    /// Depth below the stock top for drawings (DXF, SVG), mm; default 3.
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    depth: Option<f64>,
+    /// Cutting feed, mm/min.
+    #[arg(long, value_name = "MM_PER_MIN", allow_negative_numbers = true)]
+    feed: Option<f64>,
+    /// Spindle speed, rpm.
+    #[arg(long, value_name = "RPM")]
+    spindle: Option<f64>,
+    /// Controller dialect.
+    #[arg(long, value_enum, default_value = "linuxcnc")]
+    post: PostArg,
+    /// Conventional instead of climb milling.
+    #[arg(long)]
+    conventional: bool,
+    /// Order of offset passes.
+    #[arg(long, value_enum, default_value = "inside-out")]
+    order: OrderArg,
+    /// Zigzag row angle, degrees.
+    #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_negative_numbers = true)]
+    angle: f64,
+    /// Radial stock the roughing leaves for the finishing contour, mm.
+    #[arg(long, value_name = "MM", default_value_t = 0.0, allow_negative_numbers = true)]
+    stock_to_leave: f64,
+    /// Add a finishing contour at every level.
+    #[arg(long)]
+    finish: bool,
+    /// Ramp and helix angle, degrees.
+    #[arg(long, value_name = "DEG", default_value_t = 3.0, allow_negative_numbers = true)]
+    ramp_angle: f64,
+    /// Arc-fitting tolerance, mm.
+    #[arg(long, value_name = "MM", default_value_t = 0.002)]
+    arc_tolerance: f64,
+    /// Clearance above the top of the job for travel, mm.
+    #[arg(long, value_name = "MM", default_value_t = 5.0)]
+    clearance: f64,
+    /// Simulation cell size, mm (default: tool diameter / 100 within [0.02, 0.1]).
+    #[arg(long, value_name = "MM")]
+    res: Option<f64>,
+    /// Skip the simulation (no engagement, gouge or rest figures).
+    #[arg(long)]
+    no_simulate: bool,
+    /// Drawing units (DXF, SVG) whatever the file says.
+    #[arg(long, value_enum)]
+    units: Option<UnitsArg>,
+    /// SVG pixels per inch (96; old Inkscape files use 90).
+    #[arg(long, value_name = "PX", default_value_t = 96.0)]
+    svg_dpi: f64,
+    /// Tolerance for joining loose drawing entities into contours, mm.
+    #[arg(long, value_name = "MM", default_value_t = 0.01)]
+    chain_tolerance: f64,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Args)]
+struct RoughArgs {
+    /// Input: a case (.json), a DXF or an SVG drawing.
+    input: PathBuf,
+    /// G-code output (default: the input's name with .ngc, in the current folder).
+    #[arg(short, long, value_name = "OUT.ngc")]
+    output: Option<PathBuf>,
+    /// Report (JSON).
+    #[arg(long, value_name = "OUT.json")]
+    report: Option<PathBuf>,
+    /// Picture of the path coloured by engagement (.svg or .png; both when the name has no
+    /// extension).
+    #[arg(long, value_name = "OUT.svg|OUT.png")]
+    plot: Option<PathBuf>,
+    #[command(flatten)]
+    opts: CommonOpts,
+}
+
+/// An error that is the user's fault (exit 2) or not (exit 1).
+struct Failure {
+    user: bool,
+    msg: String,
+}
+
+impl From<swarf::Error> for Failure {
+    fn from(e: swarf::Error) -> Self {
+        Failure { user: e.is_user_error(), msg: e.to_string() }
+    }
+}
+
+impl From<anyhow::Error> for Failure {
+    fn from(e: anyhow::Error) -> Self {
+        Failure { user: false, msg: format!("{e:#}") }
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    let res = match cli.cmd {
+        Cmd::Rough(a) => rough(a),
+        Cmd::Demo { out_dir, opts } => demo(&out_dir, &opts),
+    };
+    match res {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => {
+            let first = f.msg.lines().next().unwrap_or("error");
+            eprintln!("swarf: {first}");
+            ExitCode::from(if f.user { 2 } else { 1 })
+        }
+    }
+}
+
+fn overrides(o: &CommonOpts) -> Overrides {
+    let mut ov = Overrides {
+        tool_diameter: o.tool_diameter,
+        width: match (o.engagement, o.stepover) {
+            (Some(t), _) => Some(Width::EngagementDeg(t)),
+            (None, Some(s)) => Some(Width::Stepover(s)),
+            _ => None,
+        },
+        stepdown: o.stepdown,
+        depth: o.depth,
+        feed: o.feed,
+        spindle_rpm: o.spindle,
+        ..Default::default()
+    };
+    ov.import.svg_px_per_inch = o.svg_dpi;
+    ov.import.chain_tolerance = o.chain_tolerance;
+    ov.import.units = o.units.map(|u| match u {
+        UnitsArg::Mm => swarf::swarf_import::Units::Millimetre,
+        UnitsArg::In => swarf::swarf_import::Units::Inch,
+        UnitsArg::Cm => swarf::swarf_import::Units::Centimetre,
+        UnitsArg::M => swarf::swarf_import::Units::Metre,
+    });
+    ov
+}
+
+fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> {
+    let params = Params {
+        strategy: match o.strategy {
+            StrategyArg::Offset => StrategyKind::Offset,
+            StrategyArg::Zigzag => StrategyKind::Zigzag,
+        },
+        climb: !o.conventional,
+        offset_order: match o.order {
+            OrderArg::InsideOut => OffsetOrder::InsideOut,
+            OrderArg::OutsideIn => OffsetOrder::OutsideIn,
+        },
+        zigzag_angle_deg: o.angle,
+        stock_to_leave: o.stock_to_leave,
+        finish: o.finish,
+        ramp_angle_deg: o.ramp_angle,
+        arc_tol: o.arc_tolerance,
+        clearance: o.clearance,
+        ..Default::default()
+    };
+    if let Some(r) = o.res
+        && !(r.is_finite() && r > 0.0)
+    {
+        return Err(swarf::Error::param("--res", format!("{r} mm: the cell size must be positive")).into());
+    }
+    if !(o.svg_dpi.is_finite() && o.svg_dpi > 0.0) {
+        return Err(swarf::Error::param("--svg-dpi", "must be positive").into());
+    }
+    if !(o.chain_tolerance.is_finite() && o.chain_tolerance >= 0.0) {
+        return Err(swarf::Error::param("--chain-tolerance", "must be zero or positive").into());
+    }
+    Ok(RoughOptions {
+        params,
+        post: match o.post {
+            PostArg::Linuxcnc => Post::LinuxCnc,
+            PostArg::Grbl => Post::Grbl,
+        },
+        sim: swarf::sim::SimOptions { res: o.res, ..Default::default() },
+        simulate: !o.no_simulate,
+        input_name,
+    })
+}
+
+fn run(job: &swarf::model::Job, opts: &RoughOptions, quiet: bool) -> Result<RoughResult, Failure> {
+    let show = !quiet && std::io::stderr().is_terminal();
+    let bar = if show { ProgressBar::new(1000) } else { ProgressBar::hidden() };
+    bar.set_style(ProgressStyle::with_template("{msg:>10} [{bar:40}] {percent:>3}%").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    let res = swarf::pipeline::rough(job, opts, &mut |stage, f| {
+        bar.set_message(match stage {
+            Stage::Plan => "planning",
+            Stage::Simulate => "simulating",
+        });
+        bar.set_position((f * 1000.0) as u64);
+    });
+    bar.finish_and_clear();
+    Ok(res?)
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same folder, so that a failure
+/// never leaves a half-written file.
+fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
+    let tmp = dir.join(format!(".{name}.swarf-tmp-{}", std::process::id()));
+    let res = (|| -> anyhow::Result<()> {
+        let mut f = std::fs::File::create(&tmp).with_context(|| format!("{}: cannot create", tmp.display()))?;
+        f.write_all(bytes).with_context(|| format!("{}: cannot write", tmp.display()))?;
+        f.sync_all().ok();
+        std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))?;
+        Ok(())
+    })();
+    if res.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    res
+}
+
+struct Outputs {
+    gcode: PathBuf,
+    report: Option<PathBuf>,
+    plot_svg: Option<PathBuf>,
+    plot_png: Option<PathBuf>,
+}
+
+fn write_outputs(job: &swarf::model::Job, res: &RoughResult, out: &Outputs) -> Result<(), Failure> {
+    // render everything first, then write: no output on failure
+    let mut files: Vec<(PathBuf, Vec<u8>)> = vec![(out.gcode.clone(), res.gcode.clone().into_bytes())];
+    if let Some(p) = &out.report {
+        let json = serde_json::to_string_pretty(&res.report).map_err(|e| Failure { user: false, msg: e.to_string() })?;
+        files.push((p.clone(), (json + "\n").into_bytes()));
+    }
+    if out.plot_svg.is_some() || out.plot_png.is_some() {
+        let Some(replay) = &res.replay else {
+            return Err(swarf::Error::param("--plot", "the picture needs the simulation (drop --no-simulate)").into());
+        };
+        let fig = swarf::plot::Figure {
+            title: format!(
+                "{} - {} - D{} - ref {:.0} deg - max {:.0} deg, p95 {:.0} deg - {:.2} min",
+                res.report.input, res.report.strategy, res.report.tool_diameter_mm, res.report.engagement_ref_deg, res.report.engagement_deg.max, res.report.engagement_deg.p95, res.report.time_min
+            ),
+            part: &job.part,
+            stock: &job.stock,
+            fixtures: &job.fixtures,
+            toolpath: &res.toolpath,
+            replay,
+            ref_deg: res.report.engagement_ref_deg,
+        };
+        let svg = swarf::plot::svg(&fig);
+        if let Some(p) = &out.plot_png {
+            files.push((p.clone(), swarf::plot::png(&svg)?));
+        }
+        if let Some(p) = &out.plot_svg {
+            files.push((p.clone(), svg.into_bytes()));
+        }
+    }
+    let mut written: Vec<PathBuf> = Vec::new();
+    for (p, b) in &files {
+        if let Err(e) = write_atomic(p, b) {
+            for w in &written {
+                let _ = std::fs::remove_file(w);
+            }
+            return Err(e.into());
+        }
+        written.push(p.clone());
+    }
+    Ok(())
+}
+
+fn summary(r: &swarf::report::Report) -> String {
+    format!(
+        "{} {}: {:.0} mm cut, {:.2} min, engagement max {:.1} p95 {:.1} deg, {} plunges, {} gouges, {} rapid collisions, rest {:.2}%, computed in {:.2} s",
+        r.input,
+        r.strategy,
+        r.cut_length_mm,
+        r.time_min,
+        r.engagement_deg.max,
+        r.engagement_deg.p95,
+        r.plunges,
+        r.gouges,
+        r.rapid_collisions,
+        r.rest_fraction * 100.0,
+        r.compute_s
+    )
+}
+
+fn rough(a: RoughArgs) -> Result<(), Failure> {
+    let job = swarf::io::load_job(&a.input, &overrides(&a.opts))?;
+    let name = a.input.file_name().and_then(|s| s.to_str()).unwrap_or("input").to_string();
+    let opts = options(&a.opts, name)?;
+    let gcode = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.ngc", job.name)));
+    let (plot_svg, plot_png) = match &a.plot {
+        None => (None, None),
+        Some(p) => match p.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+            Some("svg") => (Some(p.clone()), None),
+            Some("png") => (None, Some(p.clone())),
+            _ => (Some(p.with_extension("svg")), Some(p.with_extension("png"))),
+        },
+    };
+    let res = run(&job, &opts, a.opts.quiet)?;
+    write_outputs(&job, &res, &Outputs { gcode, report: a.report.clone(), plot_svg, plot_png })?;
+    if !a.opts.quiet {
+        eprintln!("{}", summary(&res.report));
+    }
+    Ok(())
+}
+
+fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
+    let mut job = swarf::pipeline::example_job();
+    swarf::io::apply(&mut job, &overrides(o));
+    job.validate()?;
+    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create the folder", dir.display()))?;
+    let opts = options(o, "demo_pocket (built-in)".into())?;
+    let res = run(&job, &opts, o.quiet)?;
+    let out = Outputs {
+        gcode: dir.join("demo.ngc"),
+        report: Some(dir.join("demo.report.json")),
+        plot_svg: Some(dir.join("demo.svg")),
+        plot_png: Some(dir.join("demo.png")),
+    };
+    write_outputs(&job, &res, &out)?;
+    std::fs::write(dir.join("demo_pocket.json"), include_str!("../../swarf/examples_data/demo_pocket.json"))
+        .with_context(|| format!("{}: cannot write", dir.display()))?;
+    if !o.quiet {
+        eprintln!("{}", summary(&res.report));
+        eprintln!("wrote {}/demo.ngc, demo.report.json, demo.svg, demo.png and the case demo_pocket.json", dir.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,247 @@
+//! The case format of the benchmarks (see the project docs): one JSON file with the stock, the
+//! part, fixtures, depths, tool and width of cut.
+//!
+//! The file is parsed into a JSON tree first (syntax errors come back with line and column) and
+//! then walked by hand, so that every semantic error names the key path, e.g.
+//! `part[1].holes[0][3]: expected a point [x, y] of two numbers`.
+
+use crate::error::{Error, Result};
+use crate::geom::area::Fill;
+use crate::geom::{Area, DVec2};
+use crate::model::{Job, Tool, Width};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+struct Ctx {
+    file: PathBuf,
+    scale: f64,
+}
+
+impl Ctx {
+    fn err(&self, place: impl Into<String>, reason: impl Into<String>) -> Error {
+        Error::input(&self.file, place, reason)
+    }
+
+    fn num(&self, v: &Value, place: &str) -> Result<f64> {
+        match v.as_f64() {
+            Some(x) if x.is_finite() => Ok(x),
+            _ => Err(self.err(place, format!("expected a number, found {}", short(v)))),
+        }
+    }
+
+    fn opt_num(&self, obj: &Value, key: &str) -> Result<Option<f64>> {
+        match obj.get(key) {
+            None | Some(Value::Null) => Ok(None),
+            Some(v) => self.num(v, key).map(Some),
+        }
+    }
+
+    fn ring(&self, v: &Value, place: &str) -> Result<Vec<DVec2>> {
+        let arr = v.as_array().ok_or_else(|| self.err(place, format!("expected a list of points, found {}", short(v))))?;
+        let mut pts = Vec::with_capacity(arr.len());
+        for (i, p) in arr.iter().enumerate() {
+            let pl = format!("{place}[{i}]");
+            let xy = p.as_array().filter(|a| a.len() == 2 || a.len() == 3).ok_or_else(|| {
+                self.err(&pl, format!("expected a point [x, y] of two numbers, found {}", short(p)))
+            })?;
+            let x = self.num(&xy[0], &pl)?;
+            let y = self.num(&xy[1], &pl)?;
+            pts.push(DVec2::new(x, y) * self.scale);
+        }
+        if pts.len() > 1 && pts.first() == pts.last() {
+            pts.pop();
+        }
+        if pts.len() < 3 {
+            return Err(self.err(place, format!("a closed outline needs at least 3 distinct points, found {}", pts.len())));
+        }
+        if crate::geom::ring_area(&pts).abs() < 1e-12 {
+            return Err(self.err(place, "the outline has no area (all points on one line)"));
+        }
+        Ok(pts)
+    }
+
+    /// `[{"outer": ring, "holes": [ring...]}, ...]` (union) or `[ring, ring, ...]` (even-odd).
+    fn polygons(&self, v: &Value, place: &str) -> Result<Area> {
+        let arr = v.as_array().ok_or_else(|| self.err(place, format!("expected a list of polygons, found {}", short(v))))?;
+        if arr.is_empty() {
+            return Ok(Area::empty());
+        }
+        if arr.iter().all(Value::is_object) {
+            let mut areas = Vec::new();
+            for (i, p) in arr.iter().enumerate() {
+                let pl = format!("{place}[{i}]");
+                let outer = p.get("outer").ok_or_else(|| self.err(&pl, "polygon without \"outer\""))?;
+                let mut rings = vec![self.ring(outer, &format!("{pl}.outer"))?];
+                if let Some(h) = p.get("holes") {
+                    let ha = h.as_array().ok_or_else(|| self.err(format!("{pl}.holes"), "expected a list of rings"))?;
+                    for (k, hr) in ha.iter().enumerate() {
+                        rings.push(self.ring(hr, &format!("{pl}.holes[{k}]"))?);
+                    }
+                }
+                areas.push(Area::from_rings(&rings, Fill::EvenOdd));
+            }
+            Ok(Area::union_all(areas.iter()))
+        } else if arr.iter().all(Value::is_array) {
+            let rings = arr
+                .iter()
+                .enumerate()
+                .map(|(i, r)| self.ring(r, &format!("{place}[{i}]")))
+                .collect::<Result<Vec<_>>>()?;
+            Ok(Area::from_rings(&rings, Fill::EvenOdd))
+        } else {
+            Err(self.err(place, "expected either polygons {\"outer\": …, \"holes\": …} or rings [[x, y], …], not a mix"))
+        }
+    }
+}
+
+fn short(v: &Value) -> String {
+    let s = v.to_string();
+    if s.len() > 40 { format!("{}…", &s[..s.char_indices().nth(40).map_or(s.len(), |(i, _)| i)]) } else { s }
+}
+
+/// Reads a case file.
+pub fn read_case(path: &Path) -> Result<Job> {
+    let text = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+    parse_case(path, &text)
+}
+
+/// Parses case JSON; `path` names the file in messages.
+pub fn parse_case(path: &Path, bytes: &[u8]) -> Result<Job> {
+    let file = path.to_path_buf();
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Err(Error::input(&file, "file", "the file is empty"));
+    }
+    let root: Value = serde_json::from_slice(bytes).map_err(|e| {
+        Error::input(&file, format!("line {} column {}", e.line(), e.column()), format!("not valid JSON: {e}"))
+    })?;
+    if !root.is_object() {
+        return Err(Error::input(&file, "top level", "a case is a JSON object {\"stock\": …, \"part\": …, \"tool\": …}"));
+    }
+    let units = root.get("units").and_then(Value::as_str).unwrap_or("mm");
+    let scale = match units {
+        "mm" => 1.0,
+        "in" | "inch" => 25.4,
+        other => return Err(Error::input(&file, "units", format!("unknown units {other:?} (use \"mm\" or \"in\")"))),
+    };
+    let cx = Ctx { file: file.clone(), scale };
+    if root.get("stock_box").is_some() || root.get("part_stl").is_some() {
+        return Err(cx.err(
+            "stock_box",
+            "3D cases (stock_box / part_stl) are not supported by this version; give a 2.5D case with \"stock\" and \"part\" polygons",
+        ));
+    }
+    let stock_v = root.get("stock").ok_or_else(|| cx.err("stock", "missing: the raw stock outline [[x, y], …]"))?;
+    let stock = if stock_v.as_array().is_some_and(|a| a.first().is_some_and(Value::is_array) && a.first().and_then(|p| p.get(0)).is_some_and(Value::is_number)) {
+        Area::from_rings(&[cx.ring(stock_v, "stock")?], Fill::NonZero)
+    } else {
+        cx.polygons(stock_v, "stock")?
+    };
+    let part = match root.get("part") {
+        None | Some(Value::Null) => Area::empty(),
+        Some(v) => cx.polygons(v, "part")?,
+    };
+    let fixtures = match root.get("fixtures") {
+        None | Some(Value::Null) => Area::empty(),
+        Some(v) => cx.polygons(v, "fixtures")?,
+    };
+    let tool = root.get("tool").ok_or_else(|| cx.err("tool", "missing: {\"diameter\": mm, \"type\": \"flat\"}"))?;
+    if let Some(t) = tool.get("type").and_then(Value::as_str)
+        && t != "flat"
+    {
+        return Err(cx.err("tool.type", format!("{t:?}: only flat end mills are supported")));
+    }
+    let diameter = cx.num(tool.get("diameter").ok_or_else(|| cx.err("tool.diameter", "missing"))?, "tool.diameter")? * scale;
+    let stock_top = cx.opt_num(&root, "stock_top")?.unwrap_or(0.0) * scale;
+    let part_top = cx.opt_num(&root, "part_top")?.map_or(stock_top, |v| v * scale);
+    let floor = cx.opt_num(&root, "floor")?.ok_or_else(|| cx.err("floor", "missing: the depth to clear to"))? * scale;
+    let allowance = cx.opt_num(&root, "allowance")?.unwrap_or(0.0) * scale;
+    let allowance_floor = cx.opt_num(&root, "allowance_floor")?.map_or(allowance, |v| v * scale);
+    let width = match (cx.opt_num(&root, "engagement_deg")?, cx.opt_num(&root, "stepover")?) {
+        (Some(t), _) => Width::EngagementDeg(t),
+        (None, Some(s)) => Width::Stepover(s),
+        (None, None) => Width::Stepover(0.4),
+    };
+    let which = if matches!(width, Width::EngagementDeg(_)) { "engagement_deg" } else { "stepover" };
+    width.validate(which).map_err(|e| match e {
+        Error::Param { place, reason } => cx.err(place, reason),
+        other => other,
+    })?;
+    let stepdown = cx.opt_num(&root, "stepdown")?.map(|v| v * scale);
+    let feed = cx.opt_num(&root, "feed_default")?.unwrap_or(1000.0) * scale;
+    let rapid_rate = cx.opt_num(&root, "rapid_rate")?.unwrap_or(5000.0) * scale;
+    let spindle_rpm = cx.opt_num(&root, "spindle_rpm")?.unwrap_or(10000.0);
+    if stock.is_empty() {
+        return Err(cx.err("stock", "the stock outline has no area"));
+    }
+    let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("job").to_string();
+    let mut tool = Tool::flat(diameter);
+    if let Some(n) = tool_number(tool_num_value(&root)) {
+        tool.number = n;
+    }
+    Ok(Job {
+        name,
+        stock,
+        stock_top,
+        part,
+        part_top,
+        fixtures,
+        floor,
+        allowance,
+        allowance_floor,
+        tool,
+        width,
+        stepdown,
+        feed,
+        rapid_rate,
+        spindle_rpm,
+    })
+}
+
+fn tool_num_value(root: &Value) -> Option<&Value> {
+    root.get("tool").and_then(|t| t.get("number"))
+}
+
+fn tool_number(v: Option<&Value>) -> Option<u32> {
+    v.and_then(Value::as_u64).and_then(|n| u32::try_from(n).ok()).filter(|n| *n >= 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Result<Job> {
+        parse_case(Path::new("t.json"), s.as_bytes())
+    }
+
+    #[test]
+    fn reads_a_pocket() {
+        let j = parse(r#"{"units":"mm","tool":{"diameter":6,"type":"flat"},"stock":[[0,0],[60,0],[60,20],[0,20]],
+            "part":[{"outer":[[-8,-8],[68,-8],[68,28],[-8,28]],"holes":[[[0,0],[60,0],[60,20],[0,20]]]}],
+            "floor":-5,"engagement_deg":90}"#).unwrap();
+        assert_eq!(j.tool.diameter, 6.0);
+        assert!((j.stock.area() - 1200.0).abs() < 1e-9);
+        assert!((j.part.area() - (76.0 * 36.0 - 1200.0)).abs() < 1e-6);
+        assert!((j.width.stepover() - 0.5).abs() < 1e-12);
+        assert_eq!(j.levels(), vec![-5.0]);
+    }
+
+    #[test]
+    fn errors_name_the_place() {
+        let e = parse("").unwrap_err().to_string();
+        assert!(e.contains("empty"), "{e}");
+        let e = parse("{\"stock\": [[0,0],[1,0]] garbage").unwrap_err().to_string();
+        assert!(e.contains("line 1 column"), "{e}");
+        let e = parse(r#"{"tool":{"diameter":6},"stock":[[0,0],[10,0],[10,NaN]],"floor":-1}"#).unwrap_err().to_string();
+        assert!(e.contains("not valid JSON"), "{e}");
+        let e = parse(r#"{"tool":{"diameter":6},"stock":[[0,0],[10,0],[10,"a"]],"floor":-1}"#).unwrap_err().to_string();
+        assert!(e.contains("stock[2]"), "{e}");
+        let e = parse(r#"{"tool":{"diameter":6},"stock":[[0,0],[10,0],[10,10]],"floor":-1,"stepover":1.5}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("stepover") && e.contains("(0, 1]"), "{e}");
+        let e = parse(r#"{"tool":{"diameter":6},"stock":[[0,0],[10,0],[10,10]],"part":[[[0,0],[1,1]]],"floor":-1}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("part[0]"), "{e}");
+    }
+}

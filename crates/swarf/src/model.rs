@@ -1,0 +1,257 @@
+//! The job model: part, stock, fixtures and free space (paper 1 §4), the tool and the cutting
+//! parameters, and the derived regions every strategy works with.
+//!
+//! Paper 1 describes a 2D milling step by two binary maps, part and stock, whose four
+//! combinations are: part (must stay), fixture (part without stock: forbidden), material to
+//! remove (stock without part) and free space (neither: the tool may travel and enter there).
+//! swarf keeps the same four states as exact polygon areas ([`Job`]) and as a raster
+//! ([`crate::sim::raster`]).
+
+use crate::error::{Error, Result};
+use crate::geom::{Area, DVec2};
+
+/// A flat end mill.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tool {
+    /// Diameter, mm.
+    pub diameter: f64,
+    /// Tool number written in the program (`T1`).
+    pub number: u32,
+    /// Number of flutes (for feeds per tooth in reports).
+    pub flutes: u32,
+}
+
+impl Tool {
+    /// A flat end mill of the given diameter, tool number 1.
+    pub fn flat(diameter: f64) -> Tool {
+        Tool { diameter, number: 1, flutes: 2 }
+    }
+    /// Radius, mm.
+    pub fn radius(&self) -> f64 {
+        self.diameter / 2.0
+    }
+}
+
+/// How wide the cut is: a tool engagement angle or a radial stepover.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Width {
+    /// Tool engagement angle in degrees, in (0, 180].
+    EngagementDeg(f64),
+    /// Radial stepover as a fraction of the diameter, in (0, 1].
+    Stepover(f64),
+}
+
+impl Width {
+    /// Stepover fraction of a straight cut with this width: `s = (1 - cos θ) / 2`, the inverse of
+    /// paper 1 eq. 3, `θ = 90° + asin(2s − 1)`.
+    pub fn stepover(self) -> f64 {
+        match self {
+            Width::Stepover(s) => s,
+            Width::EngagementDeg(t) => (1.0 - t.to_radians().cos()) / 2.0,
+        }
+    }
+    /// Engagement angle in degrees of a straight cut with this width (paper 1 eq. 3).
+    pub fn engagement_deg(self) -> f64 {
+        match self {
+            Width::EngagementDeg(t) => t,
+            Width::Stepover(s) => 90.0 + (2.0 * s - 1.0).clamp(-1.0, 1.0).asin().to_degrees(),
+        }
+    }
+    /// Checks the range.
+    pub fn validate(self, place: &str) -> Result<()> {
+        match self {
+            Width::Stepover(s) if !(s > 0.0 && s <= 1.0) => {
+                Err(Error::param(place, format!("stepover {s} is outside (0, 1] (a fraction of the tool diameter)")))
+            }
+            Width::EngagementDeg(t) if !(t > 0.0 && t <= 180.0) => {
+                Err(Error::param(place, format!("engagement {t}° is outside (0°, 180°]")))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+/// One 2.5D job: what to cut, with what, how.
+#[derive(Debug, Clone)]
+pub struct Job {
+    /// A short name (the input's file stem).
+    pub name: String,
+    /// Raw material outline.
+    pub stock: Area,
+    /// Top of the stock, mm.
+    pub stock_top: f64,
+    /// Material that must stay.
+    pub part: Area,
+    /// Top of the part walls, mm.
+    pub part_top: f64,
+    /// Forbidden areas (clamps, vice jaws), treated like the part over the full depth.
+    pub fixtures: Area,
+    /// Depth to clear to, mm.
+    pub floor: f64,
+    /// Stock to leave on the part walls (mm); the final part is the part grown by this.
+    pub allowance: f64,
+    /// Stock to leave on the floor (mm).
+    pub allowance_floor: f64,
+    /// The tool.
+    pub tool: Tool,
+    /// Width of cut.
+    pub width: Width,
+    /// Largest depth of one level, mm; `None` = the full depth in one level.
+    pub stepdown: Option<f64>,
+    /// Cutting feed, mm/min.
+    pub feed: f64,
+    /// Rapid rate for time estimates, mm/min.
+    pub rapid_rate: f64,
+    /// Spindle speed, rpm.
+    pub spindle_rpm: f64,
+}
+
+/// Regions derived from a [`Job`] for one tool, shared by every strategy.
+#[derive(Debug, Clone)]
+pub struct Regions {
+    /// Part and fixtures grown by the allowance: the tool must not enter.
+    pub keep: Area,
+    /// Material to remove: stock minus keep.
+    pub material: Area,
+    /// Where the tool centre may be: the working window minus keep grown by the radius.
+    pub centres: Area,
+    /// The part of `material` the tool can reach (opening by the tool disk).
+    pub reachable: Area,
+    /// A box around everything, used as the "whole plane".
+    pub window: Area,
+}
+
+/// Chord tolerance used when polygons stand for circles in region computations (mm).
+pub const REGION_TOL: f64 = 0.001;
+
+impl Job {
+    /// Checks every value a user can get wrong.
+    pub fn validate(&self) -> Result<()> {
+        let d = self.tool.diameter;
+        if !(d.is_finite() && d > 0.0) {
+            return Err(Error::param("tool diameter", format!("{d} mm: the tool diameter must be a positive number")));
+        }
+        self.width.validate(match self.width {
+            Width::Stepover(_) => "stepover",
+            Width::EngagementDeg(_) => "engagement",
+        })?;
+        if let Some(s) = self.stepdown
+            && !(s.is_finite() && s > 0.0)
+        {
+            return Err(Error::param("stepdown", format!("{s} mm: the step-down must be a positive number")));
+        }
+        for (name, v) in [("stock_top", self.stock_top), ("part_top", self.part_top), ("floor", self.floor)] {
+            if !v.is_finite() {
+                return Err(Error::param(name, "must be a finite number"));
+            }
+        }
+        if self.floor >= self.stock_top {
+            return Err(Error::param(
+                "floor",
+                format!("floor {} is not below the stock top {}: nothing to cut", self.floor, self.stock_top),
+            ));
+        }
+        if !(self.allowance.is_finite() && self.allowance >= 0.0) {
+            return Err(Error::param("allowance", "must be zero or positive"));
+        }
+        if !(self.allowance_floor.is_finite() && self.allowance_floor >= 0.0) {
+            return Err(Error::param("allowance_floor", "must be zero or positive"));
+        }
+        if !(self.feed.is_finite() && self.feed > 0.0) {
+            return Err(Error::param("feed", format!("{} mm/min: the feed must be positive", self.feed)));
+        }
+        if !(self.rapid_rate.is_finite() && self.rapid_rate > 0.0) {
+            return Err(Error::param("rapid_rate", "must be positive"));
+        }
+        if self.stock.is_empty() || self.stock.area() <= 0.0 {
+            return Err(Error::param("stock", "the stock outline is empty"));
+        }
+        Ok(())
+    }
+
+    /// Tool radius, mm.
+    pub fn radius(&self) -> f64 {
+        self.tool.radius()
+    }
+
+    /// Radial stepover in mm.
+    pub fn stepover_mm(&self) -> f64 {
+        self.width.stepover() * self.tool.diameter
+    }
+
+    /// The z of each level, top to bottom, ending at the floor (plus floor allowance).
+    pub fn levels(&self) -> Vec<f64> {
+        let bottom = self.floor + self.allowance_floor;
+        let depth = self.stock_top - bottom;
+        let n = match self.stepdown {
+            Some(s) if s > 0.0 => ((depth / s) - 1e-9).ceil().max(1.0) as usize,
+            _ => 1,
+        };
+        (1..=n).map(|i| if i == n { bottom } else { self.stock_top - depth * i as f64 / n as f64 }).collect()
+    }
+
+    /// The highest thing on the table (stock or part top), mm.
+    pub fn top(&self) -> f64 {
+        self.stock_top.max(self.part_top)
+    }
+
+    /// Computes the derived regions for a tool of radius `r` (normally [`Job::radius`]).
+    pub fn regions(&self, r: f64) -> Result<Regions> {
+        let forbidden = self.part.union(&self.fixtures);
+        let keep = if self.allowance > 0.0 { forbidden.offset(self.allowance, REGION_TOL) } else { forbidden };
+        let material = self.stock.difference(&keep).without_slivers(1e-9);
+        let (lo, hi) = self
+            .stock
+            .bounds()
+            .ok_or_else(|| Error::param("stock", "the stock outline is empty"))?;
+        let (lo, hi) = match keep.bounds() {
+            Some((a, b)) => (lo.min(a), hi.max(b)),
+            None => (lo, hi),
+        };
+        let pad = 4.0 * r + 10.0;
+        let window = Area::rect(lo.x - pad, lo.y - pad, hi.x + pad, hi.y + pad);
+        let centres = window.difference(&keep.offset(r, REGION_TOL));
+        // centres that matter: the tool touches material
+        let touching = centres.intersection(&material.offset(r, REGION_TOL));
+        let reachable = touching.offset(r, REGION_TOL).intersection(&material).without_slivers(1e-6);
+        if material.is_empty() {
+            return Err(Error::param("stock", "there is no material to remove: the part and fixtures cover the whole stock"));
+        }
+        if reachable.area() < 1e-6 {
+            return Err(Error::param(
+                "tool diameter",
+                format!(
+                    "the tool (Ø{:.3} mm) does not fit anywhere in the material to remove: the pocket is narrower than the tool",
+                    2.0 * r
+                ),
+            ));
+        }
+        Ok(Regions { keep, material, centres, reachable, window })
+    }
+}
+
+/// The point of `area` farthest from `edges` among a grid of candidates with spacing `step`
+/// (a distance-transform maximum, as paper 1 §4.5 uses to place a helical entry), and that
+/// distance.
+pub fn farthest_point(area: &Area, edges: &crate::geom::index::EdgeIndex, step: f64) -> Option<(DVec2, f64)> {
+    let (lo, hi) = area.bounds()?;
+    // keep the candidate grid to about 40 000 points
+    let step = step.max(((hi.x - lo.x) * (hi.y - lo.y) / 40_000.0).sqrt()).max(1e-3);
+    let max = (hi - lo).length() + 1.0;
+    let mut best: Option<(DVec2, f64)> = None;
+    let nx = ((hi.x - lo.x) / step).ceil() as usize + 1;
+    let ny = ((hi.y - lo.y) / step).ceil() as usize + 1;
+    for j in 0..ny {
+        for i in 0..nx {
+            let p = DVec2::new(lo.x + (i as f64 + 0.5) * step, lo.y + (j as f64 + 0.5) * step);
+            if !area.contains(p) {
+                continue;
+            }
+            let d = edges.distance(p, max);
+            if best.is_none_or(|(_, b)| d > b) {
+                best = Some((p, d));
+            }
+        }
+    }
+    best
+}

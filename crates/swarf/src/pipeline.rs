@@ -1,0 +1,155 @@
+//! The main job: a [`Job`] in, a program, its G-code, a report and a picture out.
+
+use crate::error::{Error, Result};
+use crate::model::Job;
+use crate::plan;
+use crate::post::{self, Header, Post};
+use crate::report::{self, Report};
+use crate::sim::raster::{RasterSim, Replay};
+use crate::sim::SimOptions;
+use crate::strategy::{self, LayerGeom, Params};
+use crate::toolpath::Toolpath;
+use std::time::Instant;
+
+/// Everything `rough` needs besides the job.
+#[derive(Debug, Clone)]
+pub struct RoughOptions {
+    /// Strategy and linking parameters.
+    pub params: Params,
+    /// Controller dialect.
+    pub post: Post,
+    /// Simulation settings (planning and the report).
+    pub sim: SimOptions,
+    /// Simulate the program for the report (engagement, gouges, rest).
+    pub simulate: bool,
+    /// Name of the input for the report and the header.
+    pub input_name: String,
+}
+
+impl Default for RoughOptions {
+    fn default() -> Self {
+        Self { params: Params::default(), post: Post::LinuxCnc, sim: SimOptions::default(), simulate: true, input_name: String::new() }
+    }
+}
+
+/// What `rough` produces.
+#[derive(Debug, Clone)]
+pub struct RoughResult {
+    /// The program.
+    pub toolpath: Toolpath,
+    /// Its G-code.
+    pub gcode: String,
+    /// Its figures.
+    pub report: Report,
+    /// The simulation, when it was run.
+    pub replay: Option<Replay>,
+}
+
+/// Stages reported to the progress callback.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// Computing the toolpath.
+    Plan,
+    /// Simulating it.
+    Simulate,
+}
+
+/// Checks the parameters a user can set.
+pub fn validate_params(p: &Params) -> Result<()> {
+    if !(p.ramp_angle_deg > 0.0 && p.ramp_angle_deg <= 45.0) {
+        return Err(Error::param("--ramp-angle", format!("{}°: must be in (0°, 45°]", p.ramp_angle_deg)));
+    }
+    if !(p.arc_tol > 0.0 && p.arc_tol <= 0.5) {
+        return Err(Error::param("--arc-tolerance", format!("{} mm: must be in (0, 0.5]", p.arc_tol)));
+    }
+    if !(p.stock_to_leave.is_finite() && p.stock_to_leave >= 0.0) {
+        return Err(Error::param("--stock-to-leave", "must be zero or positive"));
+    }
+    if !(p.clearance.is_finite() && p.clearance > 0.0) {
+        return Err(Error::param("--clearance", "must be positive"));
+    }
+    if !p.zigzag_angle_deg.is_finite() {
+        return Err(Error::param("--angle", "must be a number"));
+    }
+    Ok(())
+}
+
+/// Computes the roughing program of `job`, posts it, and (optionally) simulates it for the
+/// report.
+pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64)) -> Result<RoughResult> {
+    job.validate()?;
+    validate_params(&opts.params)?;
+    let t0 = Instant::now();
+    progress(Stage::Plan, 0.0);
+    let regions = job.regions(job.radius())?;
+    let geom = LayerGeom::new(job, &regions, &opts.params)?;
+    let passes = strategy::passes(job, &geom, &opts.params)?;
+    if passes.is_empty() {
+        return Err(Error::param("strategy", "the strategy found nothing to cut"));
+    }
+    let zs = job.levels();
+    let levels: Vec<(f64, Vec<strategy::Pass>)> = zs.iter().map(|z| (*z, passes.clone())).collect();
+    let finish: Vec<(f64, Vec<strategy::Pass>)> = if opts.params.finish {
+        let fp = strategy::finish_passes(job, &regions, &opts.params);
+        zs.iter().map(|z| (*z, fp.clone())).collect()
+    } else {
+        Vec::new()
+    };
+    progress(Stage::Plan, 0.5);
+    let toolpath = plan::link(job, &regions, &opts.params, &levels, &finish, &opts.sim)?;
+    let compute_s = t0.elapsed().as_secs_f64();
+    progress(Stage::Plan, 1.0);
+    let mut header = Header { spindle_rpm: job.spindle_rpm, ..Default::default() };
+    header.lines.push(format!("job {} - strategy {}", if opts.input_name.is_empty() { &job.name } else { &opts.input_name }, opts.params.strategy.name()));
+    header.lines.push(format!(
+        "stepover {:.1} pct = {:.1} deg straight-cut engagement, {} level(s) to z {:.3}, feed {:.0} mm/min",
+        job.width.stepover() * 100.0,
+        job.width.engagement_deg(),
+        zs.len(),
+        zs.last().copied().unwrap_or(job.floor),
+        job.feed
+    ));
+    header.lines.push(format!("milling {}", if opts.params.climb { "climb" } else { "conventional" }));
+    let gcode = post::write(&toolpath, opts.post, &header);
+    let mut rep = Report {
+        swarf_version: env!("CARGO_PKG_VERSION").to_string(),
+        input: opts.input_name.clone(),
+        strategy: opts.params.strategy.name().to_string(),
+        post: format!("{:?}", opts.post).to_lowercase(),
+        tool_diameter_mm: job.tool.diameter,
+        stepover: job.width.stepover(),
+        engagement_ref_deg: job.width.engagement_deg(),
+        levels: zs.clone(),
+        compute_s,
+        gcode_lines: gcode.lines().count(),
+        sim_res_mm: opts.sim.res_for(job.tool.diameter),
+        ..Default::default()
+    };
+    let mut replay = None;
+    if opts.simulate {
+        let t1 = Instant::now();
+        let mut sim = RasterSim::new(job, &regions, &opts.sim)?;
+        let rp = sim.replay(&toolpath, &mut |f| progress(Stage::Simulate, f));
+        let rest = sim.rest();
+        rep.simulate_s = t1.elapsed().as_secs_f64();
+        report::fill(&mut rep, &toolpath, &rp, &rest, job.rapid_rate);
+        replay = Some(rp);
+    } else {
+        let t = toolpath.totals(job.rapid_rate);
+        rep.cut_length_mm = t.cut_length_mm;
+        rep.rapid_length_mm = t.rapid_length_mm;
+        rep.time_min = t.time_min;
+        rep.entries = t.entries;
+        rep.plunges = t.plunges;
+    }
+    Ok(RoughResult { toolpath, gcode, report: rep, replay })
+}
+
+/// The built-in example job (a pocket with two islands).
+pub fn example_job() -> Job {
+    let text = include_str!("../examples_data/demo_pocket.json");
+    match crate::io::case::parse_case(std::path::Path::new("demo_pocket.json"), text.as_bytes()) {
+        Ok(j) => j,
+        Err(e) => unreachable!("the built-in example is valid: {e}"),
+    }
+}

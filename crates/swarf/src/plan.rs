@@ -1,0 +1,429 @@
+//! Linking: turns passes into a program — entries, links, retracts — while keeping a raster
+//! model of the material up to date so that every decision is made against what is really left.
+//!
+//! For each pass, in order:
+//! 1. If the tool is down at this level and the straight way to the pass start is free of the
+//!    part: through cleared space it stays down (a feed link, or a rapid lifted by a hair when
+//!    long); through material only when the step is short (a stepover), as a cut.
+//! 2. Otherwise the tool goes up just as far as it must (to the safe height only when the way
+//!    across is not clear), over to the start, and down:
+//!    - a rapid to just above the material and a feed descent when the tool lands in free space
+//!      or cleared space (a lateral entry from outside the stock);
+//!    - otherwise a **helix** around the start when one fits between the part walls, then one
+//!      full turn at depth (paper 1 §4.5: the distance-transform maximum is where a helix fits;
+//!      closed passes are started at their point farthest from the walls);
+//!    - otherwise a **ramp** zigzagging along the start of the pass;
+//!    - a **plunge** only when neither fits; plunges are counted and reported.
+//! 3. The pass itself, arc-fitted into lines and arcs, is cut into the model.
+
+use crate::error::Result;
+use crate::geom::arcfit::{self, Piece};
+use crate::geom::{DVec2, DVec3, polyline_length};
+use crate::model::{Job, Regions};
+use crate::sim::raster::RasterSim;
+use crate::sim::sweep::Path;
+use crate::sim::SimOptions;
+use crate::strategy::{Params, Pass, PassKind};
+use crate::toolpath::{MoveKind, Toolpath};
+
+/// Builds the program from the passes of each level (`levels[i] = (z, passes)`), then the
+/// finishing passes of each level.
+pub fn link(job: &Job, regions: &Regions, params: &Params, levels: &[(f64, Vec<Pass>)], finish: &[(f64, Vec<Pass>)], sim_opts: &SimOptions) -> Result<Toolpath> {
+    let mut sim = RasterSim::new(job, regions, sim_opts)?;
+    sim.track_exact = false;
+    let safe_z = job.top() + params.clearance;
+    let first = levels.iter().flat_map(|l| l.1.iter()).next().and_then(|p| p.pts.first().copied()).unwrap_or(DVec2::ZERO);
+    let tp = Toolpath::new(job.tool.clone(), DVec3::new(first.x, first.y, safe_z), safe_z);
+    let mut l = Linker {
+        job,
+        params,
+        sim,
+        tp,
+        safe_z,
+        r: job.radius(),
+        feed: job.feed,
+        entry_feed: job.feed * params.entry_feed_frac,
+        down_at: None,
+        step: job.stepover_mm(),
+    };
+    let nl = levels.len();
+    for (i, (z, passes)) in levels.iter().enumerate() {
+        l.tp.note(format!("level {} of {}: z {:.3}", i + 1, nl, z));
+        l.down_at = l.down_at.filter(|_| false);
+        for p in order(passes, l.tp.end().truncate()) {
+            l.pass(p, *z);
+        }
+    }
+    for (i, (z, passes)) in finish.iter().enumerate() {
+        l.tp.note(format!("finishing contour {} of {}: z {:.3}", i + 1, finish.len(), z));
+        l.down_at = None;
+        for p in order(passes, l.tp.end().truncate()) {
+            l.pass(p, *z);
+        }
+    }
+    let end = l.tp.end();
+    l.tp.note("end: retract");
+    l.tp.rapid(DVec3::new(end.x, end.y, safe_z));
+    Ok(l.tp)
+}
+
+/// Keeps the strategy's order, except that clean-up passes of one level are visited nearest
+/// first.
+fn order(passes: &[Pass], from: DVec2) -> Vec<Pass> {
+    let mut out = Vec::with_capacity(passes.len());
+    let mut cur = from;
+    let mut i = 0;
+    while i < passes.len() {
+        let mut j = i;
+        while j < passes.len() && passes[j].level == passes[i].level && passes[j].kind == passes[i].kind {
+            j += 1;
+        }
+        if passes[i].kind != PassKind::Cleanup {
+            out.extend(passes[i..j].iter().cloned());
+            cur = passes[j - 1].pts.last().copied().unwrap_or(cur);
+            i = j;
+            continue;
+        }
+        let mut group: Vec<&Pass> = passes[i..j].iter().collect();
+        while !group.is_empty() {
+            let (k, _) = group
+                .iter()
+                .enumerate()
+                .map(|(k, p)| {
+                    let d = if p.closed {
+                        p.pts.iter().map(|q| (*q - cur).length_squared()).fold(f64::INFINITY, f64::min)
+                    } else {
+                        (p.pts[0] - cur).length_squared()
+                    };
+                    (k, d)
+                })
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap_or((0, 0.0));
+            let p = group.remove(k);
+            cur = if p.closed { cur } else { *p.pts.last().unwrap_or(&cur) };
+            out.push(p.clone());
+        }
+        i = j;
+    }
+    out
+}
+
+struct Linker<'a> {
+    job: &'a Job,
+    params: &'a Params,
+    sim: RasterSim,
+    tp: Toolpath,
+    safe_z: f64,
+    r: f64,
+    feed: f64,
+    entry_feed: f64,
+    /// The level the tool is down at, if it is.
+    down_at: Option<f64>,
+    step: f64,
+}
+
+impl Linker<'_> {
+    fn push_line(&mut self, kind: MoveKind, to: DVec3, feed: f64) {
+        let from = self.tp.end();
+        if (to - from).length() < 1e-9 {
+            return;
+        }
+        if kind == MoveKind::Rapid {
+            self.tp.rapid(to);
+        } else {
+            self.tp.line(kind, to, feed);
+        }
+        if let Some(m) = self.tp.moves.last().copied() {
+            self.sim.cut(&Path::of(from, &m));
+        }
+    }
+
+    fn push_arc(&mut self, kind: MoveKind, to: DVec3, center: DVec2, ccw: bool, feed: f64) {
+        let from = self.tp.end();
+        if (to - from).length() < 1e-9 {
+            return;
+        }
+        self.tp.arc(kind, to, center, ccw, feed);
+        if let Some(m) = self.tp.moves.last().copied() {
+            self.sim.cut(&Path::of(from, &m));
+        }
+    }
+
+    /// Is the tool clear of the part along the XY segment at height z?
+    fn keep_safe(&self, a: DVec2, b: DVec2, z: f64) -> bool {
+        if z >= self.job.part_top + self.job.allowance_floor + 0.01 {
+            return true;
+        }
+        let p = Path::Line { a: a.extend(z), b: b.extend(z) };
+        self.sim.keep_distance(&p, self.r) >= self.r - 1e-6
+    }
+
+    /// True when the way from `a` to `b` at `z` is clear of material except within one tool
+    /// diameter of `b`: arriving there is a lateral entry, not a cut through material.
+    fn clear_until_near(&self, a: DVec2, b: DVec2, z: f64) -> bool {
+        let len = (b - a).length();
+        let keep_out = 2.0 * self.r;
+        if len <= keep_out {
+            return false;
+        }
+        let m = a + (b - a) * ((len - keep_out) / len);
+        self.sim.is_clear(&Path::Line { a: a.extend(z), b: m.extend(z) }, 0.0)
+    }
+
+    /// Highest material within `rho` of the point (−∞ when none).
+    fn top_near(&self, p: DVec2, rho: f64) -> f64 {
+        let h = self.sim.max_height_near(&Path::Line { a: p.extend(0.0), b: p.extend(0.0) }, rho);
+        h as f64
+    }
+
+    /// Brings the tool above `target` at height at least `h` (rapids only, through clear space).
+    fn travel(&mut self, target: DVec2, h: f64) {
+        let cur = self.tp.end();
+        let h = h.min(self.safe_z);
+        if (cur.truncate() - target).length() < 1e-9 {
+            if cur.z < h {
+                self.push_line(MoveKind::Rapid, target.extend(h), 0.0);
+            }
+            return;
+        }
+        let z = cur.z.max(h);
+        if cur.z < z {
+            self.push_line(MoveKind::Rapid, cur.truncate().extend(z), 0.0);
+        }
+        let across = Path::Line { a: cur.truncate().extend(z), b: target.extend(z) };
+        let ok = z >= self.safe_z - 1e-9 || (self.sim.is_clear(&across, 0.5) && self.keep_safe(cur.truncate(), target, z));
+        if ok {
+            self.push_line(MoveKind::Rapid, target.extend(z), 0.0);
+        } else {
+            self.push_line(MoveKind::Rapid, cur.truncate().extend(self.safe_z), 0.0);
+            self.push_line(MoveKind::Rapid, target.extend(self.safe_z), 0.0);
+        }
+        let now = self.tp.end();
+        if now.z > h {
+            self.push_line(MoveKind::Rapid, target.extend(h), 0.0);
+        }
+    }
+
+    fn pass(&mut self, pass: Pass, z: f64) {
+        if pass.pts.is_empty() {
+            return;
+        }
+        let mut pts = pass.pts.clone();
+        let cur = self.tp.end();
+        if pass.closed {
+            let k = self.pick_start(&pts, z, cur);
+            pts.rotate_left(k);
+            pts.push(pts[0]);
+        }
+        let start = pts[0];
+        let eps = 0.01;
+        let mut arrived = false;
+        if self.down_at == Some(z) {
+            let len = (start - cur.truncate()).length();
+            if len < 1e-9 {
+                arrived = true;
+            } else if self.keep_safe(cur.truncate(), start, z) {
+                let link = Path::Line { a: cur, b: start.extend(z) };
+                if self.sim.is_clear(&link, 0.0) {
+                    if len > 2.0 * self.job.tool.diameter {
+                        let lift = (z + 0.5).min(self.safe_z);
+                        self.push_line(MoveKind::Rapid, cur.truncate().extend(lift), 0.0);
+                        self.push_line(MoveKind::Rapid, start.extend(lift), 0.0);
+                        self.push_line(MoveKind::Descend, start.extend(z), self.entry_feed);
+                    } else {
+                        self.push_line(MoveKind::Link, start.extend(z), self.feed);
+                    }
+                    arrived = true;
+                } else if len <= (1.5 * self.step).max(0.5 * self.r) || self.clear_until_near(cur.truncate(), start, z) {
+                    // a short step, or a way through cleared space that only meets material
+                    // on arriving: a lateral entry into the pass
+                    self.push_line(MoveKind::Cut, start.extend(z), self.feed);
+                    arrived = true;
+                }
+            }
+        }
+        if !arrived {
+            self.enter(start, &pts, z, eps);
+        }
+        self.down_at = Some(z);
+        let kind = if pass.kind == PassKind::Finish { MoveKind::Finish } else { MoveKind::Cut };
+        self.emit(&pts, z, kind);
+    }
+
+    /// Chooses where to start a loop: where the tool can land without entering material if
+    /// anywhere, else where a helix fits best; when already down, the nearest point.
+    fn pick_start(&self, pts: &[DVec2], z: f64, cur: DVec3) -> usize {
+        let nearest = pts
+            .iter()
+            .enumerate()
+            .min_by(|a, b| (*a.1 - cur.truncate()).length_squared().total_cmp(&(*b.1 - cur.truncate()).length_squared()))
+            .map_or(0, |(k, _)| k);
+        if self.down_at == Some(z) {
+            return nearest;
+        }
+        let n = pts.len();
+        let stride = (n / 48).max(1);
+        let mut best = (nearest, f64::NEG_INFINITY);
+        for k in (0..n).step_by(stride).chain(std::iter::once(nearest)) {
+            let p = pts[k];
+            let clear = self.top_near(p, self.r + crate::strategy::LANDING_MARGIN) <= z + 0.01;
+            let kd = self.sim.keep_distance(&Path::Line { a: p.extend(z), b: p.extend(z) }, 10.0 * self.r);
+            let score = if clear { 1e9 - (p - cur.truncate()).length() } else { kd };
+            if score > best.1 {
+                best = (k, score);
+            }
+        }
+        best.0
+    }
+
+    /// Gets the tool down to `z` at `start`, entering material as gently as possible.
+    fn enter(&mut self, start: DVec2, pts: &[DVec2], z: f64, eps: f64) {
+        let r = self.r;
+        let approach = self.params.approach;
+        let top = self.top_near(start, r + crate::strategy::LANDING_MARGIN);
+        if std::env::var("SWARF_DEBUG").is_ok() {
+            eprintln!("enter at {start} z {z}: top {top} (r {r}), moves so far {}", self.tp.moves.len());
+        }
+        if top <= z + eps {
+            // free or cleared space: rapid close, feed the last bit
+            let h = (z + approach).max(if top.is_finite() { top + approach } else { z + approach });
+            self.travel(start, h);
+            self.push_line(MoveKind::Descend, start.extend(z), self.entry_feed);
+            return;
+        }
+        // helix around the start
+        let kd = self.sim.keep_distance(&Path::Line { a: start.extend(z), b: start.extend(z) }, 10.0 * r);
+        let room = kd - r - self.params.arc_tol - 0.005;
+        let rh = (self.params.helix_radius_frac * r).min(room);
+        if rh >= self.params.helix_min_frac * r {
+            let top_h = self.top_near(start, r + rh + 0.05).max(z);
+            self.helix(start, rh, top_h + approach, z, pts);
+            return;
+        }
+        // ramp along the start of the pass
+        let total = polyline_length(pts);
+        let want = (3.0 * self.job.tool.diameter).min(total);
+        if want >= (0.5 * self.job.tool.diameter).max(1.0) {
+            let prefix = prefix_of(pts, want);
+            let mut top_r = z;
+            for w in prefix.windows(2) {
+                top_r = top_r.max(self.sim.max_height_near(&Path::Line { a: w[0].extend(0.0), b: w[1].extend(0.0) }, r + 0.05) as f64);
+            }
+            self.ramp(&prefix, top_r + approach, z);
+            return;
+        }
+        // nothing fits: plunge
+        self.travel(start, top + approach);
+        self.tp.note("plunge: no room for a helix or a ramp");
+        self.push_line(MoveKind::Plunge, start.extend(z), self.entry_feed);
+    }
+
+    fn helix(&mut self, c: DVec2, rh: f64, z_from: f64, z: f64, pts: &[DVec2]) {
+        let ccw = self.params.climb; // material outside the circle: on the right when ccw
+        // start on the circle opposite the pass direction, so the last turn ends facing it
+        let dir = if pts.len() > 1 { (pts[1] - pts[0]).normalize_or_zero() } else { DVec2::X };
+        let a0 = if dir.length_squared() > 0.0 { dir.y.atan2(dir.x) + std::f64::consts::PI } else { 0.0 };
+        let on = |a: f64| c + rh * DVec2::new(a.cos(), a.sin());
+        self.travel(c, z_from);
+        self.tp.note(format!("helix entry r {:.3} at X{:.3} Y{:.3}", rh, c.x, c.y));
+        self.push_line(MoveKind::Rapid, on(a0).extend(z_from), 0.0);
+        let pitch = std::f64::consts::TAU * rh * self.params.ramp_angle_deg.to_radians().tan();
+        let total = std::f64::consts::TAU * ((z_from - z) / pitch.max(1e-6));
+        let n = (total / std::f64::consts::PI).ceil().max(1.0) as usize;
+        let s = if ccw { 1.0 } else { -1.0 };
+        for k in 1..=n {
+            let t = k as f64 / n as f64;
+            let a = a0 + s * total * t;
+            self.push_arc(MoveKind::Entry, on(a).extend(z_from + (z - z_from) * t), c, ccw, self.entry_feed);
+        }
+        // one full turn at depth cleans the bottom, then to the centre
+        let a_end = a0 + s * total;
+        self.push_arc(MoveKind::Cut, on(a_end + s * std::f64::consts::PI).extend(z), c, ccw, self.feed);
+        self.push_arc(MoveKind::Cut, on(a_end).extend(z), c, ccw, self.feed);
+        self.push_line(MoveKind::Cut, c.extend(z), self.feed);
+    }
+
+    fn ramp(&mut self, prefix: &[DVec2], z_from: f64, z: f64) {
+        let len = polyline_length(prefix);
+        let drop_per_len = self.params.ramp_angle_deg.to_radians().tan();
+        self.travel(prefix[0], z_from);
+        self.tp.note(format!("ramp entry along {:.3} mm", len));
+        let mut zc = z_from;
+        let mut forward = true;
+        let mut guard = 0;
+        while zc > z + 1e-9 && guard < 10_000 {
+            guard += 1;
+            let seq: Vec<DVec2> = if forward { prefix.to_vec() } else { prefix.iter().rev().copied().collect() };
+            let mut prev = seq[0];
+            for q in &seq[1..] {
+                let d = (*q - prev).length();
+                zc = (zc - d * drop_per_len).max(z);
+                self.push_line(MoveKind::Entry, q.extend(zc), self.entry_feed);
+                prev = *q;
+            }
+            forward = !forward;
+        }
+        // clean the wedge at full depth and come back to the start
+        if !forward {
+            // ended at the far end: back to the start
+            for q in prefix.iter().rev().skip(1) {
+                self.push_line(MoveKind::Cut, q.extend(z), self.feed);
+            }
+        } else {
+            for q in prefix.iter().skip(1) {
+                self.push_line(MoveKind::Cut, q.extend(z), self.feed);
+            }
+            for q in prefix.iter().rev().skip(1) {
+                self.push_line(MoveKind::Cut, q.extend(z), self.feed);
+            }
+        }
+    }
+
+    /// Arc-fits the polyline and appends it at `z`.
+    fn emit(&mut self, pts: &[DVec2], z: f64, kind: MoveKind) {
+        let cur = self.tp.end().truncate();
+        let mut poly = Vec::with_capacity(pts.len() + 1);
+        poly.push(cur);
+        if (pts[0] - cur).length() > 1e-9 {
+            poly.push(pts[0]);
+        }
+        poly.extend_from_slice(&pts[1..]);
+        for piece in arcfit::fit(&poly, self.params.arc_tol) {
+            match piece {
+                Piece::Line { to } => self.push_line(kind, to.extend(z), self.feed),
+                Piece::Arc { to, center, ccw } => {
+                    // split arcs over a half turn so that every move is unambiguous
+                    let from = self.tp.end().truncate();
+                    let g = crate::toolpath::ArcGeom::new(from.extend(z), to.extend(z), center, ccw);
+                    if g.sweep.abs() > std::f64::consts::PI {
+                        let mid = g.at(0.5).truncate();
+                        self.push_arc(kind, mid.extend(z), center, ccw, self.feed);
+                    }
+                    self.push_arc(kind, to.extend(z), center, ccw, self.feed);
+                }
+            }
+        }
+    }
+}
+
+/// The first `len` mm of a polyline.
+fn prefix_of(pts: &[DVec2], len: f64) -> Vec<DVec2> {
+    let mut out = vec![pts[0]];
+    let mut acc = 0.0;
+    for w in pts.windows(2) {
+        let d = (w[1] - w[0]).length();
+        if acc + d >= len {
+            let t = if d > 0.0 { (len - acc) / d } else { 0.0 };
+            out.push(w[0] + (w[1] - w[0]) * t);
+            return out;
+        }
+        acc += d;
+        out.push(w[1]);
+    }
+    out
+}
+
+/// Regions for linking, for callers that have a job only.
+pub fn regions_for(job: &Job) -> Result<Regions> {
+    job.regions(job.radius())
+}

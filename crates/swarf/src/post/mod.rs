@@ -1,0 +1,184 @@
+//! Posts: toolpaths into G-code for a controller dialect.
+//!
+//! One writer, one small [`Dialect`] per controller: the dialects differ in the start block,
+//! the tool change and what they accept (GRBL has no tool changer and no `G43`/`G64`). Output is
+//! metric and absolute (`G21 G90`), arcs in the XY plane (`G17`) with incremental centres
+//! (`I J`, the default on both), helical arcs carry `Z`. Numbers are fixed-point with trailing
+//! zeros trimmed (`X12.5`, `Y-3`), words that did not change are left out, feeds are written
+//! when they change, and a comment says what each section is. The same toolpath always gives
+//! the same bytes.
+
+pub mod grbl;
+pub mod linuxcnc;
+
+use crate::geom::DVec3;
+use crate::toolpath::{Motion, MoveKind, Toolpath};
+use std::fmt::Write;
+
+/// A controller dialect.
+pub trait Dialect {
+    /// Name for comments and the command line.
+    fn name(&self) -> &'static str;
+    /// Lines after the header comments: units, modes, cancels.
+    fn start_block(&self) -> Vec<String>;
+    /// Tool change and length offset for tool `t` (may be empty).
+    fn tool_change(&self, t: u32, diameter: f64) -> Vec<String>;
+    /// Program end.
+    fn end_block(&self) -> Vec<String>;
+}
+
+/// Available posts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Post {
+    /// LinuxCNC (rs274ngc).
+    LinuxCnc,
+    /// GRBL 1.1.
+    Grbl,
+}
+
+impl Post {
+    /// Parses a post name.
+    pub fn parse(s: &str) -> Option<Post> {
+        match s.to_ascii_lowercase().as_str() {
+            "linuxcnc" | "emc" | "emc2" => Some(Post::LinuxCnc),
+            "grbl" => Some(Post::Grbl),
+            _ => None,
+        }
+    }
+    fn dialect(self) -> Box<dyn Dialect> {
+        match self {
+            Post::LinuxCnc => Box::new(linuxcnc::LinuxCnc),
+            Post::Grbl => Box::new(grbl::Grbl),
+        }
+    }
+}
+
+/// What the header says about the job.
+#[derive(Debug, Clone, Default)]
+pub struct Header {
+    /// Free lines of description (plain ASCII; parentheses are removed).
+    pub lines: Vec<String>,
+    /// Spindle speed, rpm.
+    pub spindle_rpm: f64,
+}
+
+/// Formats a number with at most `dec` decimals, trailing zeros and `-0` removed.
+pub fn num(v: f64, dec: usize) -> String {
+    let mut s = format!("{v:.dec$}");
+    if s.contains('.') {
+        while s.ends_with('0') {
+            s.pop();
+        }
+        if s.ends_with('.') {
+            s.pop();
+        }
+    }
+    if s == "-0" {
+        s = "0".into();
+    }
+    s
+}
+
+fn comment(text: &str) -> String {
+    let clean: String = text.chars().map(|c| if c == '(' || c == ')' || !c.is_ascii() || c.is_ascii_control() { ' ' } else { c }).collect();
+    format!("({})", clean.trim())
+}
+
+/// Writes the program.
+pub fn write(tp: &Toolpath, post: Post, header: &Header) -> String {
+    let d = post.dialect();
+    let mut out = String::new();
+    let mut line = |s: &str| {
+        out.push_str(s);
+        out.push('\n');
+    };
+    line(&comment(&format!("swarf {} - post {}", env!("CARGO_PKG_VERSION"), d.name())));
+    for h in &header.lines {
+        line(&comment(h));
+    }
+    for s in d.start_block() {
+        line(&s);
+    }
+    line(&comment(&format!("tool T{} flat end mill D{}", tp.tool.number, num(tp.tool.diameter, 3))));
+    for s in d.tool_change(tp.tool.number, tp.tool.diameter) {
+        line(&s);
+    }
+    line(&format!("S{} M3", num(header.spindle_rpm.max(0.0), 0)));
+    let p = tp.start;
+    line(&format!("G0 Z{}", num(tp.clearance_z.max(p.z), 3)));
+    line(&format!("G0 X{} Y{}", num(p.x, 3), num(p.y, 3)));
+    if p.z < tp.clearance_z - 1e-9 {
+        line(&format!("G0 Z{}", num(p.z, 3)));
+    }
+    let mut pos = p;
+    let mut last_feed = f64::NAN;
+    let mut last_kind: Option<MoveKind> = None;
+    let mut notes = tp.notes.iter().peekable();
+    for (i, m) in tp.moves.iter().enumerate() {
+        while let Some(n) = notes.peek() {
+            if n.at <= i {
+                line(&comment(&n.text));
+                notes.next();
+            } else {
+                break;
+            }
+        }
+        if m.kind != MoveKind::Rapid && last_kind != Some(m.kind) && matches!(m.kind, MoveKind::Plunge) {
+            line(&comment("plunge"));
+        }
+        last_kind = Some(m.kind);
+        let mut w = String::new();
+        match m.motion {
+            Motion::Line => {
+                w.push_str(if m.is_rapid() { "G0" } else { "G1" });
+                axes(&mut w, pos, m.to, false);
+            }
+            Motion::Arc { center, ccw } => {
+                w.push_str(if ccw { "G3" } else { "G2" });
+                axes(&mut w, pos, m.to, true);
+                let _ = write!(w, " I{} J{}", num(center.x - pos.x, 4), num(center.y - pos.y, 4));
+            }
+        }
+        if !m.is_rapid() {
+            let f = (m.feed * 10.0).round() / 10.0;
+            if f != last_feed {
+                let _ = write!(w, " F{}", num(f, 1));
+                last_feed = f;
+            }
+        }
+        line(&w);
+        pos = m.to;
+    }
+    line("M5");
+    for s in d.end_block() {
+        line(&s);
+    }
+    out
+}
+
+fn axes(w: &mut String, from: DVec3, to: DVec3, arc: bool) {
+    let same = |a: f64, b: f64| num(a, 3) == num(b, 3);
+    if arc || !same(from.x, to.x) {
+        let _ = write!(w, " X{}", num(to.x, 3));
+    }
+    if arc || !same(from.y, to.y) {
+        let _ = write!(w, " Y{}", num(to.y, 3));
+    }
+    if !same(from.z, to.z) {
+        let _ = write!(w, " Z{}", num(to.z, 3));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_are_tidy() {
+        assert_eq!(num(12.5, 3), "12.5");
+        assert_eq!(num(-0.0001, 3), "0");
+        assert_eq!(num(3.0, 3), "3");
+        assert_eq!(num(-2.12345, 3), "-2.123");
+        assert_eq!(num(1000.0, 1), "1000");
+    }
+}

@@ -1,0 +1,210 @@
+//! The report: the figures that tell a machinist whether to trust a program.
+
+use crate::sim::raster::{Replay, Rest, SampleKind};
+use crate::toolpath::{Motion, Toolpath};
+
+/// Engagement statistics over samples with engagement above zero (the verifier's convention),
+/// degrees.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct Stats {
+    /// Largest.
+    pub max: f64,
+    /// 99th percentile.
+    pub p99: f64,
+    /// 95th percentile.
+    pub p95: f64,
+    /// Median.
+    pub p50: f64,
+    /// Mean.
+    pub mean: f64,
+    /// Number of samples.
+    pub n: usize,
+}
+
+impl Stats {
+    /// Statistics of the values above zero.
+    pub fn of(mut v: Vec<f64>) -> Stats {
+        v.retain(|x| *x > 0.0);
+        if v.is_empty() {
+            return Stats::default();
+        }
+        v.sort_by(f64::total_cmp);
+        let q = |p: f64| {
+            // linear interpolation between closest ranks (numpy's default)
+            let pos = p * (v.len() - 1) as f64;
+            let lo = pos.floor() as usize;
+            let hi = pos.ceil() as usize;
+            v[lo] + (v[hi] - v[lo]) * (pos - lo as f64)
+        };
+        Stats {
+            max: *v.last().unwrap_or(&0.0),
+            p99: q(0.99),
+            p95: q(0.95),
+            p50: q(0.5),
+            mean: v.iter().sum::<f64>() / v.len() as f64,
+            n: v.len(),
+        }
+    }
+}
+
+/// Time and length spent above a threshold.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct Above {
+    /// The threshold, degrees.
+    pub threshold_deg: f64,
+    /// Cutting length above it outside entry bores, mm.
+    pub length_mm: f64,
+    /// Share of the cutting time.
+    pub time_fraction: f64,
+}
+
+/// Move counts.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct Counts {
+    /// All moves.
+    pub total: usize,
+    /// G0.
+    pub rapids: usize,
+    /// G1.
+    pub lines: usize,
+    /// G2/G3.
+    pub arcs: usize,
+}
+
+/// The report of one run.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct Report {
+    /// swarf version.
+    pub swarf_version: String,
+    /// Input file or example name.
+    pub input: String,
+    /// Strategy.
+    pub strategy: String,
+    /// Post.
+    pub post: String,
+    /// Tool diameter, mm.
+    pub tool_diameter_mm: f64,
+    /// Radial stepover as a fraction of the diameter.
+    pub stepover: f64,
+    /// Reference engagement of a straight cut at that stepover, degrees.
+    pub engagement_ref_deg: f64,
+    /// z of each level.
+    pub levels: Vec<f64>,
+    /// Time to compute the toolpath (s), simulation excluded.
+    pub compute_s: f64,
+    /// Time to simulate it for this report (s).
+    pub simulate_s: f64,
+    /// Feed-move length, mm.
+    pub cut_length_mm: f64,
+    /// Rapid length, mm.
+    pub rapid_length_mm: f64,
+    /// Machining time estimate: feed lengths over feeds plus rapids over the rapid rate, min.
+    pub time_min: f64,
+    /// Exact engagement on lateral cutting outside entry bores (the helix or ramp and the first
+    /// turn at its bottom, where slotting cannot be avoided).
+    pub engagement_deg: Stats,
+    /// Exact engagement on all lateral cutting, entry bores included.
+    pub engagement_lateral_deg: Stats,
+    /// Engagement by circumference pixels (paper 1 eq. 4) on the same samples as
+    /// `engagement_deg`.
+    pub engagement_pixel_deg: Stats,
+    /// Cutting above the reference + 20°, outside entry bores.
+    pub above_ref_plus_20: Above,
+    /// Share of cutting length with no engagement (air cutting and links).
+    pub air_cut_fraction: f64,
+    /// Plunges into material.
+    pub plunges: usize,
+    /// Helix and ramp entries.
+    pub entries: usize,
+    /// Moves that rise.
+    pub retracts: usize,
+    /// Moves that gouge the part, a fixture or the floor.
+    pub gouges: usize,
+    /// Deepest gouge, mm.
+    pub gouge_max_mm: f64,
+    /// Rapids through uncut material.
+    pub rapid_collisions: usize,
+    /// Reachable material left, mm².
+    pub rest_area_mm2: f64,
+    /// Rest over reachable area.
+    pub rest_fraction: f64,
+    /// Reachable material left, mm³.
+    pub rest_volume_mm3: f64,
+    /// Area the tool can reach, mm².
+    pub reachable_area_mm2: f64,
+    /// Volume removed, mm³.
+    pub removed_volume_mm3: f64,
+    /// Moves by type.
+    pub moves: Counts,
+    /// Lines of G-code.
+    pub gcode_lines: usize,
+    /// Simulation cell size, mm.
+    pub sim_res_mm: f64,
+}
+
+/// Fills the simulation figures of a report.
+pub fn fill(rep: &mut Report, tp: &Toolpath, replay: &Replay, rest: &Rest, rapid_rate: f64) {
+    let t = tp.totals(rapid_rate);
+    rep.cut_length_mm = t.cut_length_mm;
+    rep.rapid_length_mm = t.rapid_length_mm;
+    rep.time_min = t.time_min;
+    rep.entries = t.entries;
+    rep.retracts = t.retracts;
+    let lateral: Vec<_> = replay.samples.iter().filter(|s| s.kind == SampleKind::Lateral).collect();
+    rep.engagement_lateral_deg = Stats::of(lateral.iter().map(|s| s.tea as f64).collect());
+    rep.engagement_deg = Stats::of(lateral.iter().filter(|s| !s.bore).map(|s| s.tea as f64).collect());
+    rep.engagement_pixel_deg = Stats::of(lateral.iter().filter(|s| !s.bore).map(|s| s.tea_pixel as f64).collect());
+    let thr = rep.engagement_ref_deg + 20.0;
+    let total_time: f64 = replay.samples.iter().map(|s| s.len as f64 / s.feed.max(1e-9) as f64).sum();
+    let mut above = Above { threshold_deg: thr, ..Default::default() };
+    let mut air = 0.0;
+    let mut cut = 0.0;
+    for s in &replay.samples {
+        cut += s.len as f64;
+        if s.tea <= 0.0 {
+            air += s.len as f64;
+        }
+        if !s.bore && s.tea as f64 > thr {
+            above.length_mm += s.len as f64;
+            above.time_fraction += s.len as f64 / s.feed.max(1e-9) as f64;
+        }
+    }
+    above.time_fraction = if total_time > 0.0 { above.time_fraction / total_time } else { 0.0 };
+    rep.above_ref_plus_20 = above;
+    rep.air_cut_fraction = if cut > 0.0 { air / cut } else { 0.0 };
+    rep.plunges = replay.plunges.len();
+    rep.gouges = replay.gouges.len();
+    rep.gouge_max_mm = replay.gouges.iter().map(|g| g.depth).fold(0.0, f64::max);
+    rep.rapid_collisions = replay.rapid_collisions.len();
+    rep.rest_area_mm2 = rest.area_mm2;
+    rep.rest_volume_mm3 = rest.volume_mm3;
+    rep.reachable_area_mm2 = rest.reachable_mm2;
+    rep.rest_fraction = if rest.reachable_mm2 > 0.0 { rest.area_mm2 / rest.reachable_mm2 } else { 0.0 };
+    rep.removed_volume_mm3 = replay.removed_volume;
+    let mut c = Counts { total: tp.moves.len(), ..Default::default() };
+    for m in &tp.moves {
+        if m.is_rapid() {
+            c.rapids += 1;
+        } else if matches!(m.motion, Motion::Arc { .. }) {
+            c.arcs += 1;
+        } else {
+            c.lines += 1;
+        }
+    }
+    rep.moves = c;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn percentiles_interpolate() {
+        let s = Stats::of((0..=100).map(f64::from).collect());
+        assert_eq!(s.max, 100.0);
+        assert_eq!(s.n, 100);
+        assert!((s.p50 - 50.5).abs() < 1e-9);
+        assert!((s.p99 - 99.01).abs() < 1e-9);
+        assert_eq!(Stats::of(vec![0.0, 0.0]).n, 0);
+    }
+}

@@ -1,0 +1,598 @@
+//! The raster material model and the replay of a toolpath on it.
+
+use super::exact::ExactModel;
+use super::grid::Grid;
+use super::sweep::Path;
+use super::SimOptions;
+use crate::error::{Error, Result};
+use crate::geom::index::EdgeIndex;
+use crate::geom::{Area, DVec2, DVec3};
+use crate::model::{Job, Regions};
+use crate::toolpath::{MoveKind, Toolpath, move_length};
+
+/// Cell state bits (paper 1 §4: part / stock; fixture; neither = free space).
+pub mod state {
+    /// Raw stock.
+    pub const STOCK: u8 = 1;
+    /// Part (must stay).
+    pub const PART: u8 = 2;
+    /// Fixture (forbidden).
+    pub const FIXTURE: u8 = 4;
+}
+
+/// What kind of motion an engagement sample was taken on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SampleKind {
+    /// Horizontal cutting.
+    Lateral,
+    /// Descending (ramp, helix).
+    Descending,
+    /// A plunge (360°).
+    Plunge,
+}
+
+/// One engagement sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Cutting length from the start of the program to this sample, mm.
+    pub s: f64,
+    /// Tool position.
+    pub at: DVec3,
+    /// Exact engagement, degrees.
+    pub tea: f32,
+    /// Engagement by circumference pixels (paper 1 eq. 4), degrees.
+    pub tea_pixel: f32,
+    /// Motion kind.
+    pub kind: SampleKind,
+    /// Inside an entry bore (the entry and the first turn at its bottom).
+    pub bore: bool,
+    /// Length of cutting this sample stands for, mm.
+    pub len: f32,
+    /// Feed of the move, mm/min.
+    pub feed: f32,
+    /// Index of the move.
+    pub mi: u32,
+}
+
+/// A located problem (gouge, collision, plunge).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Event {
+    /// Index of the move in the toolpath.
+    pub move_index: usize,
+    /// Where (end of the move for plunges, the worst point otherwise).
+    pub at: [f64; 3],
+    /// How deep into the part or the material, mm.
+    pub depth: f64,
+}
+
+/// Everything a replay found.
+#[derive(Debug, Clone, Default)]
+pub struct Replay {
+    /// Engagement samples along cutting moves.
+    pub samples: Vec<Sample>,
+    /// Moves that gouge.
+    pub gouges: Vec<Event>,
+    /// Rapid moves through uncut material.
+    pub rapid_collisions: Vec<Event>,
+    /// Plunges into material.
+    pub plunges: Vec<Event>,
+    /// Volume removed, mm³.
+    pub removed_volume: f64,
+}
+
+/// Rest material: reachable material left standing.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct Rest {
+    /// Area of the reachable region where material stands more than `tol` above the floor, mm².
+    pub area_mm2: f64,
+    /// Its volume, mm³.
+    pub volume_mm3: f64,
+    /// Its largest thickness, mm.
+    pub max_thickness_mm: f64,
+    /// Area the tool can reach, mm².
+    pub reachable_mm2: f64,
+}
+
+/// The raster simulator.
+#[derive(Debug, Clone)]
+pub struct RasterSim {
+    /// The grid.
+    pub grid: Grid,
+    r: f64,
+    tol: f64,
+    eps: f64,
+    ring_delta: f64,
+    sample_step: f64,
+    s: Vec<f32>,
+    s0: Vec<f32>,
+    p: Vec<f32>,
+    /// Initial cell states (see [`state`]).
+    pub state: Vec<u8>,
+    reach: Vec<bool>,
+    circ: Vec<DVec2>,
+    exact: ExactModel,
+    keep: Area,
+    keep_edges: EdgeIndex,
+    part_top_eff: f64,
+    floor_eff: f64,
+    /// Record cuts for exact engagement (off for planning-only models).
+    pub track_exact: bool,
+}
+
+impl RasterSim {
+    /// Builds the model of `job` for its tool.
+    pub fn new(job: &Job, regions: &Regions, opts: &SimOptions) -> Result<Self> {
+        let r = job.radius();
+        let res = opts.res_for(job.tool.diameter);
+        if !(res.is_finite() && res > 0.0) {
+            return Err(Error::param("--res", "the simulation cell size must be positive"));
+        }
+        let (slo, shi) = job.stock.bounds().ok_or_else(|| Error::param("stock", "empty"))?;
+        let (mut lo, mut hi) = (slo, shi);
+        if let Some((a, b)) = regions.keep.bounds() {
+            // the part can be a large frame: only the part near the stock matters
+            let m = DVec2::splat(4.0 * r + 5.0);
+            lo = lo.min(a.max(slo - m));
+            hi = hi.max(b.min(shi + m));
+        }
+        let pad = r + 4.0 * res + 1.0;
+        let grid = Grid::covering(lo, hi, pad, res, slo);
+        if grid.len() > opts.max_cells {
+            return Err(Error::param(
+                "--res",
+                format!("a {}×{} grid at {res} mm is too large; use a coarser --res", grid.nx, grid.ny),
+            ));
+        }
+        let stock_mask = grid.rasterize(&job.stock);
+        let part_mask = grid.rasterize(&job.part);
+        let fix_mask = grid.rasterize(&job.fixtures);
+        let keep_mask = grid.rasterize(&regions.keep);
+        let reach = grid.rasterize(&regions.reachable.offset(-opts.tol, crate::model::REGION_TOL));
+        let part_top_eff = job.part_top + job.allowance_floor;
+        let floor_eff = job.floor + job.allowance_floor;
+        let n = grid.len();
+        let mut s0 = vec![f32::NEG_INFINITY; n];
+        let mut p = vec![floor_eff as f32; n];
+        let mut st = vec![0u8; n];
+        for k in 0..n {
+            if stock_mask[k] {
+                s0[k] = job.stock_top as f32;
+                st[k] |= state::STOCK;
+            }
+            if part_mask[k] {
+                st[k] |= state::PART;
+            }
+            if fix_mask[k] {
+                st[k] |= state::FIXTURE;
+            }
+            if keep_mask[k] {
+                p[k] = part_top_eff.max(floor_eff) as f32;
+            }
+        }
+        // the circumference of the discretised tool (paper 1 §4.2, eq. 5: D_D = D·p): as many
+        // points as the tool image has circumference pixels, on a circle half a pixel outside
+        // the tool so that they sit in the first pixels the tool has not swept
+        let rp = r / res;
+        let ri = rp.ceil() as i32 + 1;
+        let inside = |i: i32, j: i32| ((i * i + j * j) as f64) <= rp * rp;
+        let mut count = 0usize;
+        for j in -ri..=ri {
+            for i in -ri..=ri {
+                if inside(i, j) && (!inside(i + 1, j) || !inside(i - 1, j) || !inside(i, j + 1) || !inside(i, j - 1)) {
+                    count += 1;
+                }
+            }
+        }
+        let count = count.max(16);
+        let rho = r + 0.5 * res;
+        let circ: Vec<DVec2> = (0..count)
+            .map(|k| {
+                let a = std::f64::consts::TAU * (k as f64 + 0.5) / count as f64;
+                DVec2::new(a.cos(), a.sin()) * rho
+            })
+            .collect();
+        let stock_rings: Vec<Vec<DVec2>> = job.stock.rings().cloned().collect();
+        let lo_g = DVec2::new(grid.x0, grid.y0);
+        let hi_g = lo_g + DVec2::new(grid.nx as f64, grid.ny as f64) * res;
+        let exact = ExactModel::new(r, lo_g, hi_g, stock_rings, job.stock_top, 0.05);
+        let keep_edges = EdgeIndex::from_area(&regions.keep, (2.0 * r).max(1.0));
+        Ok(Self {
+            grid,
+            r,
+            tol: opts.tol,
+            eps: opts.eps,
+            ring_delta: opts.ring_delta,
+            sample_step: opts.sample_step.unwrap_or(res / 2.0),
+            s: s0.clone(),
+            s0,
+            p,
+            state: st,
+            reach,
+            circ,
+            exact,
+            keep: regions.keep.clone(),
+            keep_edges,
+            part_top_eff,
+            floor_eff,
+            track_exact: true,
+        })
+    }
+
+    /// Tool radius.
+    pub fn radius(&self) -> f64 {
+        self.r
+    }
+
+    /// Current stock height at the cell containing `q` (−∞ outside the stock or the grid).
+    pub fn height_at(&self, q: DVec2) -> f32 {
+        self.grid.cell_of(q).map_or(f32::NEG_INFINITY, |(i, j)| self.s[j * self.grid.nx + i])
+    }
+
+    /// Highest material within `rho` of the path (−∞ when none).
+    pub fn max_height_near(&self, path: &Path, rho: f64) -> f32 {
+        let (lo, hi) = path.bbox(rho);
+        let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) else { return f32::NEG_INFINITY };
+        let mut best = f32::NEG_INFINITY;
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let k = j * self.grid.nx + i;
+                let h = self.s[k];
+                if h <= best {
+                    continue;
+                }
+                if path.distance(self.grid.center(i, j)) <= rho {
+                    best = h;
+                }
+            }
+        }
+        best
+    }
+
+    /// True when no material stands more than `eps` above the tip anywhere the tool passes
+    /// along `path` (checked with the full radius plus `margin`).
+    pub fn is_clear(&self, path: &Path, margin: f64) -> bool {
+        let (lo, hi) = path.bbox(self.r + margin);
+        let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) else { return true };
+        let eps = self.eps as f32;
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let k = j * self.grid.nx + i;
+                if self.s[k] == f32::NEG_INFINITY {
+                    continue;
+                }
+                if let Some(z) = path.reach_zmin(self.grid.center(i, j), self.r + margin)
+                    && self.s[k] > z as f32 + eps
+                {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// Exact distance from the XY path to the part/fixture boundary (capped at `max`), or 0
+    /// when the path starts inside them.
+    pub fn keep_distance(&self, path: &Path, max: f64) -> f64 {
+        let p0 = path.at(0.0).truncate();
+        if self.keep.contains(p0) {
+            return 0.0;
+        }
+        match *path {
+            Path::Line { a, b } => self.keep_edges.segment_distance(a.truncate(), b.truncate(), max),
+            Path::Arc(g) => {
+                // chords with sagitta below 1e-4 mm
+                let n = swarf_import::contour::arc_steps(g.radius, g.sweep.abs(), 1e-4);
+                let mut best = max;
+                let mut prev = g.at(0.0).truncate();
+                for i in 1..=n {
+                    let q = g.at(i as f64 / n as f64).truncate();
+                    best = best.min(self.keep_edges.segment_distance(prev, q, max));
+                    prev = q;
+                }
+                best
+            }
+        }
+    }
+
+    /// Cuts the path into the material.
+    pub fn cut(&mut self, path: &Path) {
+        let r = self.r;
+        let (lo, hi) = path.bbox(r);
+        if let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) {
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let k = j * self.grid.nx + i;
+                    if self.s[k] == f32::NEG_INFINITY {
+                        continue;
+                    }
+                    if let Some(z) = path.reach_zmin(self.grid.center(i, j), r) {
+                        let z = z as f32;
+                        if z < self.s[k] {
+                            self.s[k] = z;
+                        }
+                    }
+                }
+            }
+        }
+        if self.track_exact {
+            self.exact.add(path);
+        }
+    }
+
+    /// Engagement by paper 1 eq. 4: the share of the tool's circumference pixels that hold
+    /// material more than `eps` above the tip, times 360°. The circumference is sampled with
+    /// as many points as the discretised tool has circumference pixels, half a pixel outside the
+    /// tool, each reading the pixel it falls in; only points ahead of the motion count, and
+    /// points the current move has already swept (`current`) are not material.
+    pub fn engagement_pixel(&self, c: DVec2, z: f64, dir: DVec2, current: Option<&Path>) -> f64 {
+        let zq = (z + self.eps) as f32;
+        let mut hit = 0usize;
+        for off in &self.circ {
+            if off.dot(dir) < 0.0 {
+                continue;
+            }
+            let q = c + *off;
+            let Some((i, j)) = self.grid.cell_of(q) else { continue };
+            if self.s[j * self.grid.nx + i] <= zq {
+                continue;
+            }
+            if let Some(p) = current
+                && p.distance(q) <= self.r
+            {
+                continue;
+            }
+            hit += 1;
+        }
+        360.0 * hit as f64 / self.circ.len() as f64
+    }
+
+    /// Exact engagement (see [`ExactModel`]).
+    pub fn engagement_exact(&mut self, c: DVec2, z: f64, dir: DVec2, current: Option<&Path>) -> f64 {
+        self.exact.engagement(c, z, dir, self.r + self.ring_delta, self.eps, current)
+    }
+
+    /// Highest material strictly within `R - tol` of the tool standing at `c` (for plunges).
+    fn material_under(&self, c: DVec2, z: f64) -> bool {
+        let rr = self.r - self.tol;
+        let Some((i0, i1, j0, j1)) = self.grid.range(c - DVec2::splat(rr), c + DVec2::splat(rr)) else { return false };
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                if (self.grid.center(i, j) - c).length() <= rr && self.s[j * self.grid.nx + i] > (z + self.eps) as f32 {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// Gouge depth of a move (0 when clean): grid test against the protected heights and exact
+    /// test against the part polygons.
+    fn gouge_depth(&self, path: &Path) -> (f64, DVec3) {
+        let rr = self.r - self.tol;
+        let (lo, hi) = path.bbox(rr);
+        let mut worst = 0.0f64;
+        let mut at = path.at(0.0);
+        if let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) {
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let q = self.grid.center(i, j);
+                    let pz = self.p[j * self.grid.nx + i] as f64;
+                    if let Some(z) = path.reach_zmin(q, rr) {
+                        let d = pz - z;
+                        if d > self.tol && d > worst {
+                            worst = d;
+                            at = DVec3::new(q.x, q.y, z);
+                        }
+                    }
+                }
+            }
+        }
+        // exact radial test where the tip is below the part top
+        let (z0, z1) = path.z_range();
+        let zlim = self.part_top_eff - self.tol;
+        if z0.min(z1) < zlim && !self.keep_edges.is_empty() {
+            let (t0, t1) = if (z1 - z0).abs() < 1e-12 {
+                (0.0, 1.0)
+            } else {
+                let tz = (zlim - z0) / (z1 - z0);
+                if z1 < z0 { (tz.clamp(0.0, 1.0), 1.0) } else { (0.0, tz.clamp(0.0, 1.0)) }
+            };
+            let sub = path.sub(t0, t1);
+            let d = self.keep_distance(&sub, self.r);
+            if d < self.r - self.tol {
+                let radial = self.r - d;
+                if radial > worst {
+                    worst = radial;
+                    at = sub.at(0.0);
+                }
+            }
+        }
+        (worst, at)
+    }
+
+    /// Replays a toolpath: cuts it, samples engagement, finds gouges, collisions and plunges.
+    /// `progress` is called with the fraction done.
+    pub fn replay(&mut self, tp: &Toolpath, progress: &mut dyn FnMut(f64)) -> Replay {
+        let mut out = Replay::default();
+        let mut cum = 0.0;
+        let nmoves = tp.moves.len().max(1);
+        // entry bore tracking
+        let mut bore: Option<(DVec2, f64, f64)> = None; // centre, radius, length allowance left
+        let mut entry_pts: Vec<DVec3> = Vec::new();
+        let mut entry_arc_center: Option<(DVec2, f64)> = None;
+        for (mi, (from, m)) in tp.segments().enumerate() {
+            if mi % 256 == 0 {
+                progress(mi as f64 / nmoves as f64);
+            }
+            let path = Path::of(from, m);
+            let len3 = move_length(from, m);
+            if m.kind == MoveKind::Entry || m.kind == MoveKind::Plunge {
+                if entry_pts.is_empty() {
+                    entry_pts.push(from);
+                }
+                entry_pts.push(m.to);
+                if let crate::toolpath::Motion::Arc { center, .. } = m.motion {
+                    let rr = (from.truncate() - center).length();
+                    entry_arc_center = Some((center, entry_arc_center.map_or(rr, |(_, r): (DVec2, f64)| r.max(rr))));
+                }
+            } else if !entry_pts.is_empty() {
+                let (c, rad) = match entry_arc_center {
+                    Some(cr) => cr,
+                    None => {
+                        let mut lo = entry_pts[0].truncate();
+                        let mut hi = lo;
+                        for p in &entry_pts {
+                            lo = lo.min(p.truncate());
+                            hi = hi.max(p.truncate());
+                        }
+                        ((lo + hi) / 2.0, (hi - lo).length() / 2.0)
+                    }
+                };
+                bore = Some((c, rad, std::f64::consts::TAU * rad + self.r));
+                entry_pts.clear();
+                entry_arc_center = None;
+            }
+            if m.is_rapid() {
+                // a rapid must not touch uncut material
+                let rr = self.r - self.tol;
+                let (lo, hi) = path.bbox(rr);
+                let mut worst = 0.0f64;
+                let mut at = m.to;
+                if let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) {
+                    for j in j0..=j1 {
+                        for i in i0..=i1 {
+                            let k = j * self.grid.nx + i;
+                            if self.s[k] == f32::NEG_INFINITY {
+                                continue;
+                            }
+                            let q = self.grid.center(i, j);
+                            if let Some(z) = path.reach_zmin(q, rr) {
+                                let d = self.s[k] as f64 - z;
+                                if d > self.eps && d > worst {
+                                    worst = d;
+                                    at = DVec3::new(q.x, q.y, z);
+                                }
+                            }
+                        }
+                    }
+                }
+                if worst > 0.0 {
+                    out.rapid_collisions.push(Event { move_index: mi, at: at.to_array(), depth: worst });
+                }
+                bore = None;
+            } else {
+                let xy = path.xy_length();
+                let dz = m.to.z - from.z;
+                let steep = xy <= 1e-3 || (dz < 0.0 && (-dz).atan2(xy).to_degrees() >= 80.0);
+                if steep && dz < 0.0 && self.material_under(m.to.truncate(), m.to.z) {
+                    out.plunges.push(Event { move_index: mi, at: m.to.to_array(), depth: -dz });
+                }
+                if xy > 1e-9 {
+                    let n = (xy / self.sample_step).ceil().max(1.0) as usize;
+                    let kind = if steep && dz < 0.0 {
+                        SampleKind::Plunge
+                    } else if dz.abs() > 1e-9 {
+                        SampleKind::Descending
+                    } else {
+                        SampleKind::Lateral
+                    };
+                    let step_len = len3 / n as f64;
+                    for k in 1..=n {
+                        let t = k as f64 / n as f64;
+                        let p = path.at(t);
+                        let dir = path.dir(t);
+                        let cur = path.sub(0.0, t);
+                        let (tea, tea_px) = if kind == SampleKind::Plunge {
+                            (360.0, 360.0)
+                        } else {
+                            (
+                                self.engagement_exact(p.truncate(), p.z, dir, Some(&cur)),
+                                self.engagement_pixel(p.truncate(), p.z, dir, Some(&cur)),
+                            )
+                        };
+                        cum += step_len;
+                        let in_bore = match (&mut bore, kind) {
+                            (_, SampleKind::Descending | SampleKind::Plunge) if matches!(m.kind, MoveKind::Entry | MoveKind::Plunge) => true,
+                            (Some((c, rad, left)), SampleKind::Lateral) => {
+                                let inside = (p.truncate() - *c).length() <= *rad + (self.grid.res).max(0.05 * self.r) && *left > 0.0;
+                                *left -= step_len;
+                                if !inside {
+                                    bore = None;
+                                }
+                                inside
+                            }
+                            _ => false,
+                        };
+                        out.samples.push(Sample {
+                            s: cum,
+                            at: p,
+                            tea: tea as f32,
+                            tea_pixel: tea_px as f32,
+                            kind,
+                            bore: in_bore,
+                            len: step_len as f32,
+                            feed: m.feed as f32,
+                            mi: mi as u32,
+                        });
+                    }
+                } else {
+                    cum += len3;
+                }
+            }
+            let (g, at) = self.gouge_depth(&path);
+            if g > 0.0 {
+                out.gouges.push(Event { move_index: mi, at: at.to_array(), depth: g });
+            }
+            // cut long moves in pieces (keeps the cell windows small)
+            let xy = path.xy_length();
+            let pieces = (xy / (4.0 * self.r)).ceil().max(1.0) as usize;
+            for k in 0..pieces {
+                let sub = path.sub(k as f64 / pieces as f64, (k + 1) as f64 / pieces as f64);
+                self.cut(&sub);
+            }
+        }
+        progress(1.0);
+        let cell = self.grid.res * self.grid.res;
+        out.removed_volume = self
+            .s0
+            .iter()
+            .zip(&self.s)
+            .filter(|(a, _)| a.is_finite())
+            .map(|(a, b)| (a - b) as f64)
+            .sum::<f64>()
+            * cell;
+        out
+    }
+
+    /// Reachable material left standing more than `tol` above the floor.
+    pub fn rest(&self) -> Rest {
+        let cell = self.grid.res * self.grid.res;
+        let mut r = Rest::default();
+        let fl = self.floor_eff as f32 + self.tol as f32;
+        for k in 0..self.s.len() {
+            if !self.reach[k] {
+                continue;
+            }
+            r.reachable_mm2 += cell;
+            if self.s[k] > fl {
+                r.area_mm2 += cell;
+                let t = (self.s[k] - self.floor_eff as f32) as f64;
+                r.volume_mm3 += t * cell;
+                r.max_thickness_mm = r.max_thickness_mm.max(t);
+            }
+        }
+        r
+    }
+
+    /// Current stock heights (row-major, −∞ where there is no stock).
+    pub fn heights(&self) -> &[f32] {
+        &self.s
+    }
+
+    /// Cells of rest material (reachable and standing), for pictures.
+    pub fn rest_mask(&self) -> Vec<bool> {
+        let fl = self.floor_eff as f32 + self.tol as f32;
+        self.s.iter().zip(&self.reach).map(|(h, r)| *r && *h > fl).collect()
+    }
+}

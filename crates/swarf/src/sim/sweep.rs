@@ -1,0 +1,249 @@
+//! When is a point within reach of a moving tool? For a line or an arc (helical or not) and a
+//! point `q`, the parameter intervals during which the tool axis is within `rho` of `q`. The
+//! cutting, gouge, collision and same-move engagement tests all reduce to this.
+
+use crate::geom::{DVec2, DVec3};
+use crate::toolpath::{ArcGeom, Motion, Move};
+
+/// A move's path resolved for fast queries.
+#[derive(Debug, Clone, Copy)]
+pub enum Path {
+    /// Straight from `a` to `b`.
+    Line {
+        /// Start.
+        a: DVec3,
+        /// End.
+        b: DVec3,
+    },
+    /// Arc.
+    Arc(ArcGeom),
+}
+
+impl Path {
+    /// The path of move `m` starting at `from`.
+    pub fn of(from: DVec3, m: &Move) -> Path {
+        match m.motion {
+            Motion::Line => Path::Line { a: from, b: m.to },
+            Motion::Arc { center, ccw } => Path::Arc(ArcGeom::new(from, m.to, center, ccw)),
+        }
+    }
+
+    /// The sub-path for parameters `[t0, t1]`.
+    pub fn sub(&self, t0: f64, t1: f64) -> Path {
+        match *self {
+            Path::Line { a, b } => Path::Line { a: a + (b - a) * t0, b: a + (b - a) * t1 },
+            Path::Arc(g) => {
+                let mut h = g;
+                h.a0 = g.a0 + g.sweep * t0;
+                h.sweep = g.sweep * (t1 - t0);
+                h.z0 = g.z0 + (g.z1 - g.z0) * t0;
+                h.z1 = g.z0 + (g.z1 - g.z0) * t1;
+                Path::Arc(h)
+            }
+        }
+    }
+
+    /// Point at `t`.
+    pub fn at(&self, t: f64) -> DVec3 {
+        match *self {
+            Path::Line { a, b } => a + (b - a) * t,
+            Path::Arc(g) => g.at(t),
+        }
+    }
+
+    /// Unit XY direction of motion at `t` (zero for vertical lines).
+    pub fn dir(&self, t: f64) -> DVec2 {
+        match *self {
+            Path::Line { a, b } => (b - a).truncate().normalize_or_zero(),
+            Path::Arc(g) => g.tangent(t),
+        }
+    }
+
+    /// XY length.
+    pub fn xy_length(&self) -> f64 {
+        match *self {
+            Path::Line { a, b } => (b - a).truncate().length(),
+            Path::Arc(g) => g.xy_length(),
+        }
+    }
+
+    /// z at the start and the end.
+    pub fn z_range(&self) -> (f64, f64) {
+        match *self {
+            Path::Line { a, b } => (a.z, b.z),
+            Path::Arc(g) => (g.z0, g.z1),
+        }
+    }
+
+    /// XY bounding box, grown by `pad`.
+    pub fn bbox(&self, pad: f64) -> (DVec2, DVec2) {
+        let (lo, hi) = match *self {
+            Path::Line { a, b } => (a.truncate().min(b.truncate()), a.truncate().max(b.truncate())),
+            Path::Arc(g) => {
+                let p0 = g.at(0.0).truncate();
+                let p1 = g.at(1.0).truncate();
+                let mut lo = p0.min(p1);
+                let mut hi = p0.max(p1);
+                // axis extremes inside the sweep
+                for k in 0..4 {
+                    let ang = k as f64 * std::f64::consts::FRAC_PI_2;
+                    if angle_in_sweep(ang, g.a0, g.sweep) {
+                        let p = g.center + g.radius * DVec2::new(ang.cos(), ang.sin());
+                        lo = lo.min(p);
+                        hi = hi.max(p);
+                    }
+                }
+                (lo, hi)
+            }
+        };
+        (lo - DVec2::splat(pad), hi + DVec2::splat(pad))
+    }
+
+    /// Distance in XY from `q` to the path.
+    pub fn distance(&self, q: DVec2) -> f64 {
+        match *self {
+            Path::Line { a, b } => crate::geom::dist_point_segment(q, a.truncate(), b.truncate()),
+            Path::Arc(g) => {
+                let v = q - g.center;
+                let ang = v.y.atan2(v.x);
+                if angle_in_sweep(ang, g.a0, g.sweep) {
+                    (v.length() - g.radius).abs()
+                } else {
+                    let p0 = g.at(0.0).truncate();
+                    let p1 = g.at(1.0).truncate();
+                    (q - p0).length().min((q - p1).length())
+                }
+            }
+        }
+    }
+
+    /// Calls `f(t0, t1)` for each parameter interval (within [0, 1]) during which the axis is
+    /// within `rho` of `q` in XY.
+    #[inline]
+    pub fn reach_intervals(&self, q: DVec2, rho: f64, mut f: impl FnMut(f64, f64)) {
+        match *self {
+            Path::Line { a, b } => {
+                let d = (b - a).truncate();
+                let fv = a.truncate() - q;
+                let dd = d.length_squared();
+                let c = fv.length_squared() - rho * rho;
+                if dd < 1e-24 {
+                    if c <= 0.0 {
+                        f(0.0, 1.0);
+                    }
+                    return;
+                }
+                let bh = fv.dot(d);
+                let disc = bh * bh - dd * c;
+                if disc < 0.0 {
+                    return;
+                }
+                let s = disc.sqrt();
+                let t0 = ((-bh - s) / dd).max(0.0);
+                let t1 = ((-bh + s) / dd).min(1.0);
+                if t0 <= t1 {
+                    f(t0, t1);
+                }
+            }
+            Path::Arc(g) => {
+                let v = q - g.center;
+                let e = v.length();
+                let r = g.radius;
+                if e < 1e-12 {
+                    if r <= rho {
+                        f(0.0, 1.0);
+                    }
+                    return;
+                }
+                let k = (r * r + e * e - rho * rho) / (2.0 * r * e);
+                if k > 1.0 {
+                    return;
+                }
+                if k <= -1.0 || g.sweep.abs() < 1e-15 {
+                    if k <= -1.0 {
+                        f(0.0, 1.0);
+                    }
+                    return;
+                }
+                let alpha = k.acos();
+                let psi = v.y.atan2(v.x);
+                let d0 = crate::geom::wrap_pi(g.a0 - psi);
+                let tau = std::f64::consts::TAU;
+                for m in -2..=2 {
+                    let lo = -alpha + tau * m as f64 - d0;
+                    let hi = alpha + tau * m as f64 - d0;
+                    let (mut t0, mut t1) = (lo / g.sweep, hi / g.sweep);
+                    if t0 > t1 {
+                        std::mem::swap(&mut t0, &mut t1);
+                    }
+                    let t0 = t0.max(0.0);
+                    let t1 = t1.min(1.0);
+                    if t0 <= t1 {
+                        f(t0, t1);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Lowest tool-tip z while the axis is within `rho` of `q`, if it ever is.
+    #[inline]
+    pub fn reach_zmin(&self, q: DVec2, rho: f64) -> Option<f64> {
+        let (z0, z1) = self.z_range();
+        let mut best: Option<f64> = None;
+        self.reach_intervals(q, rho, |t0, t1| {
+            let z = (z0 + (z1 - z0) * t0).min(z0 + (z1 - z0) * t1);
+            best = Some(best.map_or(z, |b: f64| b.min(z)));
+        });
+        best
+    }
+}
+
+/// True when angle `ang` lies on the arc starting at `a0` sweeping `sweep` (signed).
+pub fn angle_in_sweep(ang: f64, a0: f64, sweep: f64) -> bool {
+    let tau = std::f64::consts::TAU;
+    if sweep.abs() >= tau {
+        return true;
+    }
+    let mut d = (ang - a0) % tau;
+    if sweep >= 0.0 {
+        if d < 0.0 {
+            d += tau;
+        }
+        d <= sweep
+    } else {
+        if d > 0.0 {
+            d -= tau;
+        }
+        d >= sweep
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::toolpath::{MoveKind, Motion};
+
+    #[test]
+    fn line_and_arc_reach() {
+        let p = Path::Line { a: DVec3::new(0.0, 0.0, 0.0), b: DVec3::new(10.0, 0.0, -1.0) };
+        let mut got = vec![];
+        p.reach_intervals(DVec2::new(5.0, 3.0), 5.0, |a, b| got.push((a, b)));
+        assert_eq!(got.len(), 1);
+        assert!((got[0].0 - 0.1).abs() < 1e-12 && (got[0].1 - 0.9).abs() < 1e-12);
+        assert!((p.reach_zmin(DVec2::new(5.0, 3.0), 5.0).unwrap() + 0.9).abs() < 1e-12);
+        assert!(p.reach_zmin(DVec2::new(5.0, 6.0), 5.0).is_none());
+        // half circle ccw of radius 10 from (10,0) to (-10,0): the point (0,-10) is 20 from
+        // the top and reachable only near the ends with rho = 14.15
+        let m = Move { kind: MoveKind::Cut, motion: Motion::Arc { center: DVec2::ZERO, ccw: true }, to: DVec3::new(-10.0, 0.0, 0.0), feed: 1.0 };
+        let a = Path::of(DVec3::new(10.0, 0.0, 0.0), &m);
+        let mut iv = vec![];
+        a.reach_intervals(DVec2::new(0.0, -10.0), 14.2, |x, y| iv.push((x, y)));
+        assert_eq!(iv.len(), 2, "{iv:?}");
+        assert!(iv[0].0.abs() < 1e-12 || iv[1].0.abs() < 1e-12);
+        assert!((a.distance(DVec2::new(0.0, 5.0)) - 5.0).abs() < 1e-12);
+        assert!((a.distance(DVec2::new(0.0, -5.0)) - 125f64.sqrt()).abs() < 1e-12);
+        let (lo, hi) = a.bbox(0.0);
+        assert!((hi.y - 10.0).abs() < 1e-12 && lo.y.abs() < 1e-12);
+    }
+}

@@ -1,0 +1,86 @@
+//! Clean-up passes: where the clearing passes leave material the tool can reach.
+//!
+//! Contour-parallel levels spaced by the stepover leave cusps where the level curves have
+//! corners (on the medial axis, the tips of the offsets); zigzag rows leave scallops between row
+//! ends and the wall contour. The region actually swept by the passes is computed exactly (the
+//! union of the tool disks along them), subtracted from the reachable material, and what is left
+//! gets more level curves of the wall distance at half, quarter, … the stepover, clipped to near
+//! the leftovers, until nothing is left (or four refinements).
+
+use super::{LayerGeom, Params, Pass, PassKind};
+use crate::geom::{Area, DVec2};
+use crate::model::REGION_TOL;
+
+/// Leftovers thinner than twice this (mm) are numerical slivers, not material.
+const SLIVER: f64 = 0.02;
+
+fn swept(passes: &[Pass], r: f64) -> Area {
+    let paths: Vec<Vec<DVec2>> = passes
+        .iter()
+        .map(|p| {
+            let mut v = p.pts.clone();
+            if p.closed && !v.is_empty() {
+                v.push(v[0]);
+            }
+            v
+        })
+        .collect();
+    Area::stroke(&paths, r, false, 0.002)
+}
+
+/// Material the passes leave, without slivers.
+pub fn leftover(g: &LayerGeom, passes: &[Pass]) -> Area {
+    let left = g.reachable.difference(&swept(passes, g.r));
+    left.offset(-SLIVER, REGION_TOL).offset(SLIVER, REGION_TOL).intersection(&left).without_slivers(0.01)
+}
+
+/// Extra passes that clear what `existing` leaves.
+pub fn passes(g: &LayerGeom, params: &Params, existing: &[Pass]) -> Vec<Pass> {
+    let mut out: Vec<Pass> = Vec::new();
+    let mut left = leftover(g, existing);
+    for refine in 1..=4 {
+        if left.is_empty() {
+            break;
+        }
+        let zone = left.offset(g.r, REGION_TOL).intersection(&g.centres);
+        let step = g.step / f64::from(1u32 << refine);
+        let mut new = Vec::new();
+        if g.keep.is_empty() {
+            let mut k = 1usize;
+            loop {
+                let a = g.touch.offset(-(k as f64) * step, REGION_TOL);
+                if a.is_empty() || k > 10_000 {
+                    break;
+                }
+                for ring in a.rings() {
+                    let mut closed = ring.clone();
+                    closed.push(ring[0]);
+                    for mut p in zone.clip_polyline(&closed) {
+                        super::offset::orient_along(&mut p, &closed);
+                        new.push(Pass { pts: p, closed: false, kind: PassKind::Cleanup, level: -(k as f64), reversible: false });
+                    }
+                }
+                k += 1;
+            }
+        } else {
+            let mut k = 1usize;
+            loop {
+                let level = g.wall_level + k as f64 * step;
+                if zone.difference(&g.keep.offset(level, REGION_TOL)).without_slivers(1e-6).is_empty() || k > 10_000 {
+                    break;
+                }
+                new.extend(super::offset::level_passes(&g.keep, level, &zone, params, true, PassKind::Cleanup));
+                k += 1;
+            }
+        }
+        if new.is_empty() {
+            break;
+        }
+        // farthest from the walls first, like the clearing
+        new.sort_by(|a, b| b.level.total_cmp(&a.level));
+        let all: Vec<Pass> = existing.iter().chain(out.iter()).chain(new.iter()).cloned().collect();
+        left = leftover(g, &all);
+        out.extend(new);
+    }
+    out
+}

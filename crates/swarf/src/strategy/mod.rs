@@ -1,0 +1,203 @@
+//! Clearing strategies. Each one takes the regions of a level and returns *passes*: tool-centre
+//! polylines in cutting order. Entries, links, retracts and the move list are added by
+//! [`crate::plan`], the same for every strategy.
+//!
+//! - [`offset`]: contour-parallel offsets of the part (inside-out or outside-in);
+//! - [`zigzag`]: direction-parallel rows at a settable angle, with a contour along the walls;
+//! - [`cleanup`]: extra passes where the others left material the tool can reach.
+
+pub mod cleanup;
+pub mod offset;
+pub mod zigzag;
+
+use crate::error::Result;
+use crate::geom::{Area, DVec2};
+use crate::model::{Job, REGION_TOL, Regions};
+
+/// Passes start and end this far (mm) outside the material, so that the tool lands beside it
+/// and enters sideways.
+pub const TOUCH_MARGIN: f64 = 0.03;
+
+/// A tool may descend vertically where no material stands within this distance of its axis
+/// beyond its radius (mm); below [`TOUCH_MARGIN`], so pass ends in the air qualify.
+pub const LANDING_MARGIN: f64 = 0.02;
+
+/// The strategies swarf has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StrategyKind {
+    /// Contour-parallel offsets.
+    Offset,
+    /// Direction-parallel zigzag.
+    Zigzag,
+}
+
+impl StrategyKind {
+    /// Parses a strategy name.
+    pub fn parse(s: &str) -> Option<StrategyKind> {
+        match s {
+            "offset" | "contour" => Some(StrategyKind::Offset),
+            "zigzag" | "raster" => Some(StrategyKind::Zigzag),
+            _ => None,
+        }
+    }
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        match self {
+            StrategyKind::Offset => "offset",
+            StrategyKind::Zigzag => "zigzag",
+        }
+    }
+}
+
+/// Order of contour-parallel passes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OffsetOrder {
+    /// From the farthest pass toward the walls (pocket centre first, walls last; on an open
+    /// side, from the free edge of the stock toward the part).
+    InsideOut,
+    /// From the walls outward (the wall pass first).
+    OutsideIn,
+}
+
+/// Parameters shared by the strategies and the linker.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Params {
+    /// Strategy.
+    pub strategy: StrategyKind,
+    /// Climb milling (material on the tool's right with a clockwise spindle) or conventional.
+    pub climb: bool,
+    /// Order of offset passes.
+    pub offset_order: OffsetOrder,
+    /// Zigzag row angle, degrees from +X.
+    pub zigzag_angle_deg: f64,
+    /// Radial stock the roughing passes leave on the walls for the finishing contour, mm.
+    pub stock_to_leave: f64,
+    /// Add a finishing contour at every level (removes `stock_to_leave`).
+    pub finish: bool,
+    /// Ramp and helix angle, degrees.
+    pub ramp_angle_deg: f64,
+    /// Largest helix radius as a fraction of the tool radius.
+    pub helix_radius_frac: f64,
+    /// Smallest helix radius as a fraction of the tool radius.
+    pub helix_min_frac: f64,
+    /// Arc-fitting tolerance, mm.
+    pub arc_tol: f64,
+    /// Clearance above the top of everything for travel, mm.
+    pub clearance: f64,
+    /// Height above material from which to start entries and descents, mm.
+    pub approach: f64,
+    /// Entry (ramp, helix, plunge) feed as a fraction of the cutting feed.
+    pub entry_feed_frac: f64,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self {
+            strategy: StrategyKind::Offset,
+            climb: true,
+            offset_order: OffsetOrder::InsideOut,
+            zigzag_angle_deg: 0.0,
+            stock_to_leave: 0.0,
+            finish: false,
+            ramp_angle_deg: 3.0,
+            helix_radius_frac: 0.75,
+            helix_min_frac: 0.1,
+            arc_tol: 0.002,
+            clearance: 5.0,
+            approach: 1.0,
+            entry_feed_frac: 0.5,
+        }
+    }
+}
+
+/// What a pass is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PassKind {
+    /// Clearing.
+    Clear,
+    /// Contour along the walls at the roughing offset.
+    Contour,
+    /// Clean-up of material left by the others.
+    Cleanup,
+    /// Finishing contour at the final offset.
+    Finish,
+}
+
+/// One tool-centre polyline at a level, in cutting order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pass {
+    /// Points (for a closed pass the first point is not repeated).
+    pub pts: Vec<DVec2>,
+    /// A loop: the linker may start it anywhere and returns to the start.
+    pub closed: bool,
+    /// Purpose.
+    pub kind: PassKind,
+    /// Offset level (distance from the walls) it was made at, when it has one; used to order.
+    pub level: f64,
+    /// Climb direction: `true` keeps the loop as given when the linker re-starts it.
+    pub reversible: bool,
+}
+
+/// Geometry of a level shared by the strategies.
+#[derive(Debug, Clone)]
+pub struct LayerGeom {
+    /// Tool radius.
+    pub r: f64,
+    /// Stepover, mm.
+    pub step: f64,
+    /// Walls the roughing keeps away from: keep grown by the stock to leave.
+    pub keep: Area,
+    /// Offset of the first pass from `keep` (tool radius plus a margin for arc fitting).
+    pub wall_level: f64,
+    /// Where a tool centre touches material (material grown by `R − ε`).
+    pub touch: Area,
+    /// Where a tool centre may go for roughing: `touch` minus `keep` grown by `wall_level`.
+    pub centres: Area,
+    /// Material the roughing tool can reach.
+    pub reachable: Area,
+    /// The job's regions.
+    pub regions: Regions,
+}
+
+impl LayerGeom {
+    /// Derives the roughing geometry of a job.
+    pub fn new(job: &Job, regions: &Regions, params: &Params) -> Result<LayerGeom> {
+        let r = job.radius();
+        let leave = if params.finish || params.stock_to_leave > 0.0 { params.stock_to_leave.max(0.0) } else { 0.0 };
+        let keep = if leave > 0.0 { regions.keep.offset(leave, REGION_TOL) } else { regions.keep.clone() };
+        let wall_level = r + params.arc_tol + 0.001;
+        let touch = regions.material.offset(r + TOUCH_MARGIN, REGION_TOL);
+        let centres = if keep.is_empty() {
+            touch.clone()
+        } else {
+            touch.intersection(&regions.window.difference(&keep.offset(wall_level, REGION_TOL)))
+        };
+        let reachable = centres.offset(r, REGION_TOL).intersection(&regions.material).without_slivers(1e-6);
+        Ok(LayerGeom { r, step: job.stepover_mm(), keep, wall_level, touch, centres, reachable, regions: regions.clone() })
+    }
+}
+
+/// The passes of `strategy` for one level (the same at every level of a 2.5D job).
+pub fn passes(job: &Job, geom: &LayerGeom, params: &Params) -> Result<Vec<Pass>> {
+    let mut out = match params.strategy {
+        StrategyKind::Offset => offset::passes(geom, params),
+        StrategyKind::Zigzag => zigzag::passes(geom, params),
+    };
+    let extra = cleanup::passes(geom, params, &out);
+    out.extend(extra);
+    let _ = job;
+    Ok(out)
+}
+
+/// The finishing contour passes (walls at exactly the tool radius plus the fitting margin).
+pub fn finish_passes(job: &Job, regions: &Regions, params: &Params) -> Vec<Pass> {
+    let r = job.radius();
+    let level = r + params.arc_tol + 0.001;
+    let touch = regions.material.offset(r + TOUCH_MARGIN, REGION_TOL);
+    offset::level_passes(&regions.keep, level, &touch, params, true, PassKind::Finish)
+}
+
+/// True when a ring is counter-clockwise.
+pub(crate) fn ccw(ring: &[DVec2]) -> bool {
+    crate::geom::ring_area(ring) > 0.0
+}
