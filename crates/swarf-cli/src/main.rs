@@ -147,6 +147,10 @@ struct RoughArgs {
     /// extension).
     #[arg(long, value_name = "OUT.svg|OUT.png")]
     plot: Option<PathBuf>,
+    /// Engagement samples along the path (CSV: cut length, x, y, z, exact and pixel
+    /// engagement, kind, entry bore, move index).
+    #[arg(long, value_name = "OUT.csv")]
+    samples: Option<PathBuf>,
     #[command(flatten)]
     opts: CommonOpts,
 }
@@ -296,6 +300,7 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 struct Outputs {
     gcode: PathBuf,
     report: Option<PathBuf>,
+    samples: Option<PathBuf>,
     plot_svg: Option<PathBuf>,
     plot_png: Option<PathBuf>,
 }
@@ -306,6 +311,24 @@ fn write_outputs(job: &swarf::model::Job, res: &RoughResult, out: &Outputs) -> R
     if let Some(p) = &out.report {
         let json = serde_json::to_string_pretty(&res.report).map_err(|e| Failure { user: false, msg: e.to_string() })?;
         files.push((p.clone(), (json + "\n").into_bytes()));
+    }
+    if let Some(p) = &out.samples {
+        let Some(replay) = &res.replay else {
+            return Err(swarf::Error::param("--samples", "the samples need the simulation (drop --no-simulate)").into());
+        };
+        let mut csv = String::from("cut_length_mm,x,y,z,tea_deg,tea_pixel_deg,kind,bore,move\n");
+        for sm in &replay.samples {
+            let kind = match sm.kind {
+                swarf::sim::SampleKind::Lateral => "lateral",
+                swarf::sim::SampleKind::Descending => "descending",
+                swarf::sim::SampleKind::Plunge => "plunge",
+            };
+            csv.push_str(&format!(
+                "{:.4},{:.4},{:.4},{:.4},{:.2},{:.2},{},{},{}\n",
+                sm.s, sm.at.x, sm.at.y, sm.at.z, sm.tea, sm.tea_pixel, kind, u8::from(sm.bore), sm.mi
+            ));
+        }
+        files.push((p.clone(), csv.into_bytes()));
     }
     if out.plot_svg.is_some() || out.plot_png.is_some() {
         let Some(replay) = &res.replay else {
@@ -375,7 +398,7 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
         },
     };
     let res = run(&job, &opts, a.opts.quiet)?;
-    write_outputs(&job, &res, &Outputs { gcode, report: a.report.clone(), plot_svg, plot_png })?;
+    write_outputs(&job, &res, &Outputs { gcode, report: a.report.clone(), samples: a.samples.clone(), plot_svg, plot_png })?;
     if !a.opts.quiet {
         eprintln!("{}", summary(&res.report));
     }
@@ -392,6 +415,7 @@ fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
     let out = Outputs {
         gcode: dir.join("demo.ngc"),
         report: Some(dir.join("demo.report.json")),
+        samples: None,
         plot_svg: Some(dir.join("demo.svg")),
         plot_png: Some(dir.join("demo.png")),
     };

@@ -96,7 +96,8 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
         Vec::new()
     };
     progress(Stage::Plan, 0.5);
-    let toolpath = plan::link(job, &regions, &opts.params, &levels, &finish, &opts.sim)?;
+    let mut toolpath = plan::link(job, &regions, &opts.params, &levels, &finish, &opts.sim)?;
+    toolpath.quantize(post::COORD_STEP, post::CENTER_STEP);
     let compute_s = t0.elapsed().as_secs_f64();
     progress(Stage::Plan, 1.0);
     let mut header = Header { spindle_rpm: job.spindle_rpm, ..Default::default() };

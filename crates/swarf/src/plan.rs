@@ -210,6 +210,23 @@ impl Linker<'_> {
         }
         let mut pts = pass.pts.clone();
         let cur = self.tp.end();
+        if !pass.closed && pass.reversible && pts.len() > 1 {
+            // start from the end where the tool can land, or else the nearer one
+            let landing = |p: DVec2| self.top_near(p, self.r + crate::strategy::LANDING_MARGIN) <= z + 0.01;
+            let (a, b) = (pts[0], pts[pts.len() - 1]);
+            let reverse = if self.down_at == Some(z) {
+                (b - cur.truncate()).length() < (a - cur.truncate()).length()
+            } else {
+                match (landing(a), landing(b)) {
+                    (false, true) => true,
+                    (true, false) => false,
+                    _ => (b - cur.truncate()).length() < (a - cur.truncate()).length(),
+                }
+            };
+            if reverse {
+                pts.reverse();
+            }
+        }
         if pass.closed {
             let k = self.pick_start(&pts, z, cur);
             pts.rotate_left(k);
@@ -379,7 +396,9 @@ impl Linker<'_> {
         }
     }
 
-    /// Arc-fits the polyline and appends it at `z`.
+    /// Appends a pass at `z`: stretches where the tool would only cut air become rapids lifted
+    /// clear of the floor (when long enough to be worth it and the straight way is clear); the
+    /// rest is arc-fitted into lines and arcs.
     fn emit(&mut self, pts: &[DVec2], z: f64, kind: MoveKind) {
         let cur = self.tp.end().truncate();
         let mut poly = Vec::with_capacity(pts.len() + 1);
@@ -388,7 +407,54 @@ impl Linker<'_> {
             poly.push(pts[0]);
         }
         poly.extend_from_slice(&pts[1..]);
-        for piece in arcfit::fit(&poly, self.params.arc_tol) {
+        // split into pieces at most R long and classify them
+        let piece = self.r.max(0.5);
+        let mut fine: Vec<(DVec2, bool)> = vec![(poly[0], false)];
+        for w in poly.windows(2) {
+            let n = ((w[1] - w[0]).length() / piece).ceil().max(1.0) as usize;
+            let mut prev = w[0];
+            for k in 1..=n {
+                let q = w[0] + (w[1] - w[0]) * (k as f64 / n as f64);
+                let clear = self.sim.is_clear(&Path::Line { a: prev.extend(z), b: q.extend(z) }, -0.005);
+                fine.push((q, clear));
+                prev = q;
+            }
+        }
+        // runs of equal classification; a point belongs to the run of the segment ending at it
+        let min_air = 2.0 * self.job.tool.diameter;
+        let mut i = 0;
+        while i + 1 < fine.len() {
+            let air = fine[i + 1].1;
+            let mut j = i + 1;
+            while j + 1 < fine.len() && fine[j + 1].1 == air {
+                j += 1;
+            }
+            let run: Vec<DVec2> = fine[i..=j].iter().map(|p| p.0).collect();
+            if air && polyline_length(&run) >= min_air && self.lift_across(run[0], run[run.len() - 1], z) {
+                // done by lift_across
+            } else {
+                self.fit_emit(&run, z, if air { MoveKind::Link } else { kind });
+            }
+            i = j;
+        }
+    }
+
+    /// Rapid from `a` to `b` lifted by half a millimetre, when the straight way is clear.
+    fn lift_across(&mut self, a: DVec2, b: DVec2, z: f64) -> bool {
+        let lift = (z + 0.5).min(self.safe_z);
+        let across = Path::Line { a: a.extend(lift), b: b.extend(lift) };
+        if !(self.sim.is_clear(&across, 0.0) && self.keep_safe(a, b, lift)) {
+            return false;
+        }
+        self.push_line(MoveKind::Rapid, a.extend(lift), 0.0);
+        self.push_line(MoveKind::Rapid, b.extend(lift), 0.0);
+        self.push_line(MoveKind::Rapid, b.extend(z), 0.0);
+        true
+    }
+
+    /// Arc-fits the polyline (which starts where the tool is) and appends it at `z`.
+    fn fit_emit(&mut self, poly: &[DVec2], z: f64, kind: MoveKind) {
+        for piece in arcfit::fit(poly, self.params.arc_tol) {
             match piece {
                 Piece::Line { to } => self.push_line(kind, to.extend(z), self.feed),
                 Piece::Arc { to, center, ccw } => {

@@ -233,6 +233,40 @@ impl Toolpath {
         })
     }
 
+    /// Rounds every end point to a grid of `step` mm (what the post will print) and moves each
+    /// arc centre onto the perpendicular bisector of its rounded chord, rounded to `center_step`,
+    /// so that the start and end radii of every printed arc agree to about `center_step`
+    /// (controllers reject arcs whose radii differ, and simulators misread them). After this the
+    /// simulation replays exactly the program that is written.
+    pub fn quantize(&mut self, step: f64, center_step: f64) {
+        let q = |v: f64, s: f64| {
+            let r = (v / s).round() * s;
+            if r == 0.0 { 0.0 } else { r }
+        };
+        let q3 = |p: DVec3| DVec3::new(q(p.x, step), q(p.y, step), q(p.z, step));
+        self.start = q3(self.start);
+        let mut from = self.start;
+        for m in &mut self.moves {
+            let to = q3(m.to);
+            if let Motion::Arc { center, ccw } = m.motion {
+                let a = from.truncate();
+                let b = to.truncate();
+                let mid = (a + b) / 2.0;
+                let chord = b - a;
+                let c = if chord.length_squared() > 1e-18 {
+                    let n = chord.perp().normalize();
+                    mid + n * (center - mid).dot(n)
+                } else {
+                    center
+                };
+                let c = DVec2::new(q(c.x - a.x, center_step) + a.x, q(c.y - a.y, center_step) + a.y);
+                m.motion = Motion::Arc { center: c, ccw };
+            }
+            m.to = to;
+            from = to;
+        }
+    }
+
     /// Lengths, time and counts.
     pub fn totals(&self, rapid_rate: f64) -> Totals {
         let mut t = Totals::default();

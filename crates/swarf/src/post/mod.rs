@@ -84,7 +84,14 @@ fn comment(text: &str) -> String {
     format!("({})", clean.trim())
 }
 
-/// Writes the program.
+/// Decimals of coordinates (X, Y, Z) in the output.
+pub const COORD_STEP: f64 = 0.001;
+/// Decimals of arc centre offsets (I, J): finer than coordinates so that the start and end
+/// radii of an arc agree (see [`crate::toolpath::Toolpath::quantize`]).
+pub const CENTER_STEP: f64 = 0.00001;
+
+/// Writes the program (call [`crate::toolpath::Toolpath::quantize`] with [`COORD_STEP`] and
+/// [`CENTER_STEP`] first so that what is simulated is what is written).
 pub fn write(tp: &Toolpath, post: Post, header: &Header) -> String {
     let d = post.dialect();
     let mut out = String::new();
@@ -136,7 +143,7 @@ pub fn write(tp: &Toolpath, post: Post, header: &Header) -> String {
             Motion::Arc { center, ccw } => {
                 w.push_str(if ccw { "G3" } else { "G2" });
                 axes(&mut w, pos, m.to, true);
-                let _ = write!(w, " I{} J{}", num(center.x - pos.x, 4), num(center.y - pos.y, 4));
+                let _ = write!(w, " I{} J{}", num(center.x - pos.x, 5), num(center.y - pos.y, 5));
             }
         }
         if !m.is_rapid() {

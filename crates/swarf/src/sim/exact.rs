@@ -13,7 +13,7 @@
 //! A primitive whose z changes (helix, ramp) is split into pieces at most `dz` deep, each
 //! counted as clearing down to its highest point — slightly conservative on the way down.
 
-use super::sweep::Path;
+use super::sweep::{Fast, Path};
 use crate::geom::{DVec2, wrap_pi};
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -21,6 +21,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 #[derive(Debug, Clone, Copy)]
 struct Prim {
     path: Path,
+    fast: Fast,
     z: f64,
 }
 
@@ -105,7 +106,8 @@ impl ExactModel {
                 break;
             }
             let id = self.prims.len() as u32;
-            self.prims.push(Prim { path: if len < 1e-12 { path.sub(0.0, 0.0) } else { p }, z });
+            let pp = if len < 1e-12 { path.sub(0.0, 0.0) } else { p };
+            self.prims.push(Prim { path: pp, fast: Fast::new(&pp), z });
             self.stamp.push(0);
             let (lo, hi) = p.bbox(self.r);
             if let Some((x0, x1, y0, y1)) = self.cell_range(lo, hi) {
@@ -178,13 +180,13 @@ impl ExactModel {
                         if p.z > zq {
                             continue;
                         }
-                        covered_intervals(&p.path, rr, c, rho, base, &mut self.angles, &mut self.covered);
+                        covered_intervals(&p.path, &p.fast, rr, c, rho, base, &mut self.angles, &mut self.covered);
                     }
                 }
             }
         }
         if let Some(cur) = current {
-            covered_intervals(cur, rr, c, rho, base, &mut self.angles, &mut self.covered);
+            covered_intervals(cur, &Fast::new(cur), rr, c, rho, base, &mut self.angles, &mut self.covered);
         }
         // 3. measure base minus covered
         self.covered.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -309,9 +311,10 @@ fn ring_segment_crossings(c: DVec2, rho: f64, a: DVec2, b: DVec2, base: f64, out
 
 /// Appends to `covered` the front-half angular intervals of the ring inside the sweep of `path`
 /// with tool radius `r`.
-fn covered_intervals(path: &Path, r: f64, c: DVec2, rho: f64, base: f64, scratch: &mut Vec<f64>, covered: &mut Vec<(f64, f64)>) {
+#[allow(clippy::too_many_arguments)]
+fn covered_intervals(path: &Path, fast: &Fast, r: f64, c: DVec2, rho: f64, base: f64, scratch: &mut Vec<f64>, covered: &mut Vec<(f64, f64)>) {
     // quick reject: the ring cannot meet the sweep
-    let d = path.distance(c);
+    let d = fast.distance(c);
     if d > rho + r {
         return;
     }
@@ -366,7 +369,7 @@ fn covered_intervals(path: &Path, r: f64, c: DVec2, rho: f64, base: f64, scratch
         }
         let mid = 0.5 * (a0 + a1);
         let q = c + rho * DVec2::new((base + mid).cos(), (base + mid).sin());
-        if path.distance(q) <= r {
+        if fast.distance(q) <= r {
             if covered.len() > start
                 && let Some(last) = covered.last_mut()
                 && (a0 - last.1).abs() < 1e-12

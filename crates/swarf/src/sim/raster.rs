@@ -2,7 +2,7 @@
 
 use super::exact::ExactModel;
 use super::grid::Grid;
-use super::sweep::Path;
+use super::sweep::{Fast, Path};
 use super::SimOptions;
 use crate::error::{Error, Result};
 use crate::geom::index::EdgeIndex;
@@ -234,6 +234,7 @@ impl RasterSim {
         let (lo, hi) = path.bbox(rho);
         let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) else { return f32::NEG_INFINITY };
         let mut best = f32::NEG_INFINITY;
+        let f = Fast::new(path);
         for j in j0..=j1 {
             for i in i0..=i1 {
                 let k = j * self.grid.nx + i;
@@ -241,7 +242,7 @@ impl RasterSim {
                 if h <= best {
                     continue;
                 }
-                if path.distance(self.grid.center(i, j)) <= rho {
+                if f.distance(self.grid.center(i, j)) <= rho {
                     best = h;
                 }
             }
@@ -255,14 +256,22 @@ impl RasterSim {
         let (lo, hi) = path.bbox(self.r + margin);
         let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) else { return true };
         let eps = self.eps as f32;
+        let flat = path.is_flat().then(|| (Fast::new(path), (path.z_range().0 as f32) + eps));
+        let rho = self.r + margin;
         for j in j0..=j1 {
             for i in i0..=i1 {
                 let k = j * self.grid.nx + i;
-                if self.s[k] == f32::NEG_INFINITY {
+                let h = self.s[k];
+                if h == f32::NEG_INFINITY {
                     continue;
                 }
-                if let Some(z) = path.reach_zmin(self.grid.center(i, j), self.r + margin)
-                    && self.s[k] > z as f32 + eps
+                let q = self.grid.center(i, j);
+                if let Some((f, zq)) = &flat {
+                    if h > *zq && f.distance(q) <= rho {
+                        return false;
+                    }
+                } else if let Some(z) = path.reach_zmin(q, rho)
+                    && h > z as f32 + eps
                 {
                     return false;
                 }
@@ -300,15 +309,22 @@ impl RasterSim {
         let r = self.r;
         let (lo, hi) = path.bbox(r);
         if let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) {
+            let flat = path.is_flat().then(|| (Fast::new(path), path.z_range().0 as f32));
             for j in j0..=j1 {
                 for i in i0..=i1 {
                     let k = j * self.grid.nx + i;
-                    if self.s[k] == f32::NEG_INFINITY {
+                    let h = self.s[k];
+                    if h == f32::NEG_INFINITY {
                         continue;
                     }
-                    if let Some(z) = path.reach_zmin(self.grid.center(i, j), r) {
+                    let q = self.grid.center(i, j);
+                    if let Some((f, z)) = &flat {
+                        if *z < h && f.distance(q) <= r {
+                            self.s[k] = *z;
+                        }
+                    } else if let Some(z) = path.reach_zmin(q, r) {
                         let z = z as f32;
-                        if z < self.s[k] {
+                        if z < h {
                             self.s[k] = z;
                         }
                     }
@@ -328,6 +344,7 @@ impl RasterSim {
     pub fn engagement_pixel(&self, c: DVec2, z: f64, dir: DVec2, current: Option<&Path>) -> f64 {
         let zq = (z + self.eps) as f32;
         let mut hit = 0usize;
+        let current = current.map(Fast::new);
         for off in &self.circ {
             if off.dot(dir) < 0.0 {
                 continue;
@@ -337,7 +354,7 @@ impl RasterSim {
             if self.s[j * self.grid.nx + i] <= zq {
                 continue;
             }
-            if let Some(p) = current
+            if let Some(p) = &current
                 && p.distance(q) <= self.r
             {
                 continue;
@@ -374,16 +391,27 @@ impl RasterSim {
         let mut worst = 0.0f64;
         let mut at = path.at(0.0);
         if let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) {
+            let flat = path.is_flat().then(|| (Fast::new(path), path.z_range().0));
             for j in j0..=j1 {
                 for i in i0..=i1 {
-                    let q = self.grid.center(i, j);
                     let pz = self.p[j * self.grid.nx + i] as f64;
-                    if let Some(z) = path.reach_zmin(q, rr) {
-                        let d = pz - z;
-                        if d > self.tol && d > worst {
-                            worst = d;
-                            at = DVec3::new(q.x, q.y, z);
+                    let q = self.grid.center(i, j);
+                    let z = match &flat {
+                        Some((f, z)) => {
+                            if pz - *z <= self.tol.max(worst) || f.distance(q) > rr {
+                                continue;
+                            }
+                            *z
                         }
+                        None => match path.reach_zmin(q, rr) {
+                            Some(z) => z,
+                            None => continue,
+                        },
+                    };
+                    let d = pz - z;
+                    if d > self.tol && d > worst {
+                        worst = d;
+                        at = DVec3::new(q.x, q.y, z);
                     }
                 }
             }
@@ -460,6 +488,7 @@ impl RasterSim {
                 let mut worst = 0.0f64;
                 let mut at = m.to;
                 if let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) {
+                    let flat = path.is_flat().then(|| (Fast::new(&path), path.z_range().0));
                     for j in j0..=j1 {
                         for i in i0..=i1 {
                             let k = j * self.grid.nx + i;
@@ -467,7 +496,17 @@ impl RasterSim {
                                 continue;
                             }
                             let q = self.grid.center(i, j);
-                            if let Some(z) = path.reach_zmin(q, rr) {
+                            let zr = match &flat {
+                                Some((f, z)) => {
+                                    if (self.s[k] as f64) - *z <= self.eps || f.distance(q) > rr {
+                                        None
+                                    } else {
+                                        Some(*z)
+                                    }
+                                }
+                                None => path.reach_zmin(q, rr),
+                            };
+                            if let Some(z) = zr {
                                 let d = self.s[k] as f64 - z;
                                 if d > self.eps && d > worst {
                                     worst = d;

@@ -99,22 +99,16 @@ impl Path {
         (lo - DVec2::splat(pad), hi + DVec2::splat(pad))
     }
 
-    /// Distance in XY from `q` to the path.
+    /// Distance in XY from `q` to the path (prepare a [`Fast`] for many queries).
     pub fn distance(&self, q: DVec2) -> f64 {
-        match *self {
-            Path::Line { a, b } => crate::geom::dist_point_segment(q, a.truncate(), b.truncate()),
-            Path::Arc(g) => {
-                let v = q - g.center;
-                let ang = v.y.atan2(v.x);
-                if angle_in_sweep(ang, g.a0, g.sweep) {
-                    (v.length() - g.radius).abs()
-                } else {
-                    let p0 = g.at(0.0).truncate();
-                    let p1 = g.at(1.0).truncate();
-                    (q - p0).length().min((q - p1).length())
-                }
-            }
-        }
+        Fast::new(self).distance(q)
+    }
+
+    /// True when z does not change along the path.
+    #[inline]
+    pub fn is_flat(&self) -> bool {
+        let (z0, z1) = self.z_range();
+        z0 == z1
     }
 
     /// Calls `f(t0, t1)` for each parameter interval (within [0, 1]) during which the axis is
@@ -199,6 +193,89 @@ impl Path {
     }
 }
 
+/// A path prepared for many distance queries: no trigonometry per query.
+#[derive(Debug, Clone, Copy)]
+pub enum Fast {
+    /// Segment `a`–`b`.
+    Line {
+        /// Start.
+        a: DVec2,
+        /// `b - a`.
+        ab: DVec2,
+        /// `1 / |ab|²` (0 for a point).
+        inv: f64,
+    },
+    /// Arc of at most one turn.
+    Arc {
+        /// Centre.
+        c: DVec2,
+        /// Radius.
+        r: f64,
+        /// Unit vector to the start.
+        u0: DVec2,
+        /// Unit vector to the end.
+        u1: DVec2,
+        /// Start point.
+        p0: DVec2,
+        /// End point.
+        p1: DVec2,
+        /// Signed sweep.
+        sweep: f64,
+    },
+}
+
+impl Fast {
+    /// Prepares `path`.
+    pub fn new(path: &Path) -> Fast {
+        match *path {
+            Path::Line { a, b } => {
+                let (a, b) = (a.truncate(), b.truncate());
+                let ab = b - a;
+                let l2 = ab.length_squared();
+                Fast::Line { a, ab, inv: if l2 > 0.0 { 1.0 / l2 } else { 0.0 } }
+            }
+            Path::Arc(g) => {
+                let u0 = DVec2::new(g.a0.cos(), g.a0.sin());
+                let a1 = g.a0 + g.sweep;
+                let u1 = DVec2::new(a1.cos(), a1.sin());
+                Fast::Arc { c: g.center, r: g.radius, u0, u1, p0: g.center + g.radius * u0, p1: g.center + g.radius * u1, sweep: g.sweep }
+            }
+        }
+    }
+
+    /// True when the direction `v` (from the centre) lies within the arc's sweep.
+    #[inline]
+    fn in_sector(u0: DVec2, u1: DVec2, sweep: f64, v: DVec2) -> bool {
+        let (s0, s1) = if sweep >= 0.0 { (u0.perp_dot(v), v.perp_dot(u1)) } else { (v.perp_dot(u0), u1.perp_dot(v)) };
+        let small = sweep.abs() <= std::f64::consts::PI;
+        if small {
+            s0 >= 0.0 && s1 >= 0.0
+        } else {
+            // a sweep over a half turn: everything but the complementary small sector
+            s0 >= 0.0 || s1 >= 0.0
+        }
+    }
+
+    /// Distance in XY from `q`.
+    #[inline]
+    pub fn distance(&self, q: DVec2) -> f64 {
+        match *self {
+            Fast::Line { a, ab, inv } => {
+                let t = ((q - a).dot(ab) * inv).clamp(0.0, 1.0);
+                (a + ab * t - q).length()
+            }
+            Fast::Arc { c, r, u0, u1, p0, p1, sweep } => {
+                let v = q - c;
+                if Self::in_sector(u0, u1, sweep, v) {
+                    (v.length() - r).abs()
+                } else {
+                    (q - p0).length().min((q - p1).length())
+                }
+            }
+        }
+    }
+}
+
 /// True when angle `ang` lies on the arc starting at `a0` sweeping `sweep` (signed).
 pub fn angle_in_sweep(ang: f64, a0: f64, sweep: f64) -> bool {
     let tau = std::f64::consts::TAU;
@@ -242,6 +319,24 @@ mod tests {
         assert_eq!(iv.len(), 2, "{iv:?}");
         assert!(iv[0].0.abs() < 1e-12 || iv[1].0.abs() < 1e-12);
         assert!((a.distance(DVec2::new(0.0, 5.0)) - 5.0).abs() < 1e-12);
+        // the prepared form agrees with the angle test everywhere, for both directions and
+        // sweeps over a half turn
+        for (ccw, to) in [(true, DVec3::new(-10.0, 0.0, 0.0)), (false, DVec3::new(0.0, -10.0, 0.0)), (true, DVec3::new(0.0, -10.0, 0.0))] {
+            let m = Move { kind: MoveKind::Cut, motion: Motion::Arc { center: DVec2::ZERO, ccw }, to, feed: 1.0 };
+            let path = Path::of(DVec3::new(10.0, 0.0, 0.0), &m);
+            let Path::Arc(g) = path else { panic!() };
+            let f = Fast::new(&path);
+            for i in 0..200 {
+                let q = DVec2::new((i as f64 * 0.731).sin() * 17.0, (i as f64 * 1.37).cos() * 17.0);
+                let v = q;
+                let slow = if angle_in_sweep(v.y.atan2(v.x), g.a0, g.sweep) {
+                    (v.length() - 10.0).abs()
+                } else {
+                    (q - g.at(0.0).truncate()).length().min((q - g.at(1.0).truncate()).length())
+                };
+                assert!((f.distance(q) - slow).abs() < 1e-9, "{q} {} {slow}", f.distance(q));
+            }
+        }
         assert!((a.distance(DVec2::new(0.0, -5.0)) - 125f64.sqrt()).abs() < 1e-12);
         let (lo, hi) = a.bbox(0.0);
         assert!((hi.y - 10.0).abs() < 1e-12 && lo.y.abs() < 1e-12);

@@ -134,7 +134,8 @@ pub struct Pass {
     pub kind: PassKind,
     /// Offset level (distance from the walls) it was made at, when it has one; used to order.
     pub level: f64,
-    /// Climb direction: `true` keeps the loop as given when the linker re-starts it.
+    /// The pass may be cut in either direction (zigzag rows alternate anyway): the linker may
+    /// reverse it to start from an end where the tool can land.
     pub reversible: bool,
 }
 

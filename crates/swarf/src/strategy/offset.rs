@@ -205,6 +205,10 @@ pub fn level_passes(keep: &Area, level: f64, touch: &Area, params: &Params, towa
 /// Clipping a closed loop cuts it at its start point too; joins the piece that ends at the
 /// loop's start with the one that begins there.
 fn join_wrapped(mut pieces: Vec<Vec<DVec2>>, ring: &[DVec2]) -> Vec<Vec<DVec2>> {
+    // the clipper need not keep the direction: orient every piece along the ring first
+    for p in &mut pieces {
+        orient_along(p, ring);
+    }
     let s = ring[0];
     let ends_at = pieces.iter().position(|p| p.last().is_some_and(|q| (*q - s).length() < 1e-7));
     let starts_at = pieces.iter().position(|p| p.first().is_some_and(|q| (*q - s).length() < 1e-7));
@@ -214,10 +218,6 @@ fn join_wrapped(mut pieces: Vec<Vec<DVec2>>, ring: &[DVec2]) -> Vec<Vec<DVec2>> 
         let tail = pieces[b].clone();
         pieces[e].extend(tail.into_iter().skip(1));
         pieces.remove(b);
-    }
-    // the clipper need not keep the direction: orient every piece along the ring
-    for p in &mut pieces {
-        orient_along(p, ring);
     }
     pieces
 }

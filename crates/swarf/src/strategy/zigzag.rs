@@ -22,6 +22,10 @@ pub fn passes(g: &LayerGeom, params: &Params) -> Vec<Pass> {
         umin = umin.min(c.dot(u));
         umax = umax.max(c.dot(u));
     }
+    // rows that never overlap the material by half a stepover only graze it (slivers of the
+    // centre region beside round corners, along free edges): the wall contour or the
+    // neighbouring rows clear what they would
+    let strong = g.centres.intersection(&g.regions.material.offset(g.r - 0.5 * g.step, crate::model::REGION_TOL));
     let span = vmax - vmin;
     let n = (span / g.step).ceil().max(1.0) as usize;
     let gap = span / n as f64;
@@ -41,6 +45,7 @@ pub fn passes(g: &LayerGeom, params: &Params) -> Vec<Pass> {
                 if (e - s).dot(u) >= 0.0 { (s, e) } else { (e, s) }
             })
             .filter(|(s, e)| (*e - *s).length() > 1e-6)
+            .filter(|(s, e)| strong.clip_polyline(&[*s, *e]).iter().any(|p| polyline_length(p) > 1e-3))
             .collect();
         segs.sort_by(|x, y| x.0.dot(u).total_cmp(&y.0.dot(u)));
         rows.push(segs);
@@ -124,7 +129,7 @@ pub fn passes(g: &LayerGeom, params: &Params) -> Vec<Pass> {
         }
         cur = *chain.last().unwrap_or(&cur);
         if polyline_length(&chain) > 1e-6 {
-            out.push(Pass { pts: chain, closed: false, kind: PassKind::Clear, level: f64::INFINITY, reversible: false });
+            out.push(Pass { pts: chain, closed: false, kind: PassKind::Clear, level: f64::INFINITY, reversible: true });
         }
     }
     // the wall contour
