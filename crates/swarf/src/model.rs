@@ -195,8 +195,11 @@ impl Job {
         self.stock_top.max(self.part_top)
     }
 
-    /// Computes the derived regions for a tool of radius `r` (normally [`Job::radius`]).
-    pub fn regions(&self, r: f64) -> Result<Regions> {
+    /// Computes the derived regions for a tool of radius `r` (normally [`Job::radius`]) whose
+    /// axis keeps `margin` more than `r` away from the part and fixtures (the strategies' wall
+    /// clearance, see [`crate::strategy::wall_margin`]): `centres` is where the axis may go,
+    /// `reachable` the material the tool sweeps from there.
+    pub fn regions(&self, r: f64, margin: f64) -> Result<Regions> {
         let forbidden = self.part.union(&self.fixtures);
         let keep = if self.allowance > 0.0 { forbidden.offset(self.allowance, REGION_TOL) } else { forbidden };
         let material = self.stock.difference(&keep).without_slivers(1e-9);
@@ -210,7 +213,7 @@ impl Job {
         };
         let pad = 4.0 * r + 10.0;
         let window = Area::rect(lo.x - pad, lo.y - pad, hi.x + pad, hi.y + pad);
-        let centres = window.difference(&keep.offset(r, REGION_TOL));
+        let centres = window.difference(&keep.offset(r + margin.max(0.0), REGION_TOL));
         // centres that matter: the tool touches material
         let touching = centres.intersection(&material.offset(r, REGION_TOL));
         let reachable = touching.offset(r, REGION_TOL).intersection(&material).without_slivers(1e-6);

@@ -81,9 +81,19 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
     validate_params(&opts.params)?;
     let t0 = Instant::now();
     progress(Stage::Plan, 0.0);
-    let regions = job.regions(job.radius())?;
+    let debug = std::env::var("SWARF_DEBUG").is_ok();
+    let regions = job.regions(job.radius(), strategy::wall_margin(&opts.params))?;
+    if debug {
+        eprintln!("regions {:.3} s", t0.elapsed().as_secs_f64());
+    }
     let geom = LayerGeom::new(job, &regions, &opts.params)?;
+    if debug {
+        eprintln!("layer geometry {:.3} s", t0.elapsed().as_secs_f64());
+    }
     let passes = strategy::passes(job, &geom, &opts.params)?;
+    if debug {
+        eprintln!("passes {:.3} s ({} passes)", t0.elapsed().as_secs_f64(), passes.len());
+    }
     if passes.is_empty() {
         return Err(Error::param("strategy", "the strategy found nothing to cut"));
     }
@@ -130,8 +140,10 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
     if opts.simulate {
         let t1 = Instant::now();
         let mut sim = RasterSim::new(job, &regions, &opts.sim)?;
-        let rp = sim.replay(&toolpath, &mut |f| progress(Stage::Simulate, f));
+        let mut rp = sim.replay(&toolpath, &mut |f| progress(Stage::Simulate, f));
         let rest = sim.rest();
+        rp.rest_cells = sim.rest_cells();
+        rp.res = sim.grid.res;
         rep.simulate_s = t1.elapsed().as_secs_f64();
         report::fill(&mut rep, &toolpath, &rp, &rest, job.rapid_rate);
         replay = Some(rp);

@@ -298,9 +298,6 @@ impl Linker<'_> {
         let r = self.r;
         let approach = self.params.approach;
         let top = self.top_near(start, r + crate::strategy::LANDING_MARGIN);
-        if std::env::var("SWARF_DEBUG").is_ok() {
-            eprintln!("enter at {start} z {z}: top {top} (r {r}), moves so far {}", self.tp.moves.len());
-        }
         if top <= z + eps {
             // free or cleared space: rapid close, feed the last bit
             let h = (z + approach).max(if top.is_finite() { top + approach } else { z + approach });
@@ -487,9 +484,4 @@ fn prefix_of(pts: &[DVec2], len: f64) -> Vec<DVec2> {
         out.push(w[1]);
     }
     out
-}
-
-/// Regions for linking, for callers that have a job only.
-pub fn regions_for(job: &Job) -> Result<Regions> {
-    job.regions(job.radius())
 }

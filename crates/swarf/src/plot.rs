@@ -142,6 +142,16 @@ pub fn svg(f: &Figure) -> String {
         let _ = writeln!(o, r#"<path d="{d}" fill="none" stroke="{}" stroke-width="{width:.2}" stroke-linejoin="round"/>"#, hex(tea_color(tea)));
         i = j.max(i + 1);
     }
+    // rest material: reachable material left standing
+    if !f.replay.rest_cells.is_empty() {
+        let side = (f.replay.res * s).max(1.0);
+        let mut d = String::new();
+        for c in f.replay.rest_cells.iter().take(200_000) {
+            let (x, y) = map(*c);
+            let _ = write!(d, "M{:.1},{:.1}h{side:.1}v{side:.1}h-{side:.1}z", x - side / 2.0, y - side / 2.0);
+        }
+        let _ = writeln!(o, r##"<path d="{d}" fill="#e00000"/>"##);
+    }
     // start marker: circle of the tool at the first cutting point
     if let Some(first) = samples.first() {
         let p = map(first.at.truncate());
@@ -194,7 +204,7 @@ pub fn svg(f: &Figure) -> String {
         let t = k as f64 * 10.0 + 5.0;
         let _ = writeln!(o, r#"<rect x="{}" y="610" width="24" height="10" fill="{}"/>"#, 20.0 + k as f64 * 24.0, hex(tea_color(t)));
     }
-    let _ = writeln!(o, r#"<text x="20" y="634" font-size="11">0°</text><text x="452" y="634" font-size="11" text-anchor="end">180°</text><text x="470" y="620" font-size="11">engagement; grey: no engagement; dotted: rapids</text>"#);
+    let _ = writeln!(o, r#"<text x="20" y="634" font-size="11">0°</text><text x="452" y="634" font-size="11" text-anchor="end">180°</text><text x="470" y="620" font-size="11">engagement; grey: no engagement; dotted: rapids; red: material left</text>"#);
     let arcs = f.toolpath.moves.iter().filter(|m| matches!(m.motion, Motion::Arc { .. })).count();
     let _ = writeln!(o, r#"<text x="840" y="30" font-size="13">{} moves, {} arcs</text>"#, f.toolpath.moves.len(), arcs);
     o.push_str("</svg>\n");

@@ -211,6 +211,17 @@ impl Area {
         out
     }
 
+    /// Every ring simplified by Douglas–Peucker within `tol`, then re-normalised (rings keep
+    /// their orientation, so holes stay holes).
+    pub fn simplified(&self, tol: f64) -> Area {
+        let rings: Vec<Vec<DVec2>> = self
+            .rings()
+            .map(|r| super::simplify::douglas_peucker_ring(r, tol))
+            .filter(|r| r.len() >= 3)
+            .collect();
+        Area::from_rings(&rings, Fill::NonZero)
+    }
+
     /// The pieces of a polyline inside the area (boundary excluded).
     pub fn clip_polyline(&self, path: &[DVec2]) -> Vec<Vec<DVec2>> {
         if self.is_empty() || path.len() < 2 {

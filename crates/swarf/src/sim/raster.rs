@@ -79,6 +79,10 @@ pub struct Replay {
     pub plunges: Vec<Event>,
     /// Volume removed, mm³.
     pub removed_volume: f64,
+    /// Centres of the cells of rest material after the program (filled by the pipeline).
+    pub rest_cells: Vec<DVec2>,
+    /// Cell size of the simulation, mm.
+    pub res: f64,
 }
 
 /// Rest material: reachable material left standing.
@@ -629,9 +633,18 @@ impl RasterSim {
         &self.s
     }
 
-    /// Cells of rest material (reachable and standing), for pictures.
-    pub fn rest_mask(&self) -> Vec<bool> {
+    /// Centres of the cells of rest material (reachable and standing), for pictures.
+    pub fn rest_cells(&self) -> Vec<DVec2> {
         let fl = self.floor_eff as f32 + self.tol as f32;
-        self.s.iter().zip(&self.reach).map(|(h, r)| *r && *h > fl).collect()
+        let mut out = Vec::new();
+        for j in 0..self.grid.ny {
+            for i in 0..self.grid.nx {
+                let k = j * self.grid.nx + i;
+                if self.reach[k] && self.s[k] > fl {
+                    out.push(self.grid.center(i, j));
+                }
+            }
+        }
+        out
     }
 }

@@ -66,12 +66,14 @@ pub fn passes(g: &LayerGeom, params: &Params, existing: &[Pass]) -> Vec<Pass> {
             }
         } else {
             let mut k = 1usize;
+            let mut grown = g.keep.offset(g.wall_level, REGION_TOL);
             loop {
                 let level = g.wall_level + k as f64 * step;
-                if zone.difference(&g.keep.offset(level, REGION_TOL)).without_slivers(1e-6).is_empty() || k > 10_000 {
+                grown = grown.simplified(super::offset::GROW_SIMPLIFY).offset(step, REGION_TOL);
+                if zone.difference(&grown).without_slivers(1e-6).is_empty() || k > 10_000 {
                     break;
                 }
-                new.extend(super::offset::level_passes(&g.keep, level, &zone, params, true, PassKind::Cleanup));
+                new.extend(super::offset::ring_passes(&grown, level, &zone, params, true, PassKind::Cleanup));
                 k += 1;
             }
         }

@@ -22,6 +22,12 @@ pub const TOUCH_MARGIN: f64 = 0.03;
 /// beyond its radius (mm); below [`TOUCH_MARGIN`], so pass ends in the air qualify.
 pub const LANDING_MARGIN: f64 = 0.02;
 
+/// How much farther than its radius the tool axis stays from the walls (mm): the arc-fitting
+/// tolerance plus a micrometre, so that no fitted arc comes closer than the radius.
+pub fn wall_margin(params: &Params) -> f64 {
+    params.arc_tol + 0.001
+}
+
 /// The strategies swarf has.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StrategyKind {
@@ -166,7 +172,7 @@ impl LayerGeom {
         let r = job.radius();
         let leave = if params.finish || params.stock_to_leave > 0.0 { params.stock_to_leave.max(0.0) } else { 0.0 };
         let keep = if leave > 0.0 { regions.keep.offset(leave, REGION_TOL) } else { regions.keep.clone() };
-        let wall_level = r + params.arc_tol + 0.001;
+        let wall_level = r + wall_margin(params);
         let touch = regions.material.offset(r + TOUCH_MARGIN, REGION_TOL);
         let centres = if keep.is_empty() {
             touch.clone()
@@ -184,7 +190,11 @@ pub fn passes(job: &Job, geom: &LayerGeom, params: &Params) -> Result<Vec<Pass>>
         StrategyKind::Offset => offset::passes(geom, params),
         StrategyKind::Zigzag => zigzag::passes(geom, params),
     };
+    let t = std::time::Instant::now();
     let extra = cleanup::passes(geom, params, &out);
+    if std::env::var("SWARF_DEBUG").is_ok() {
+        eprintln!("cleanup {:.3} s, {} passes", t.elapsed().as_secs_f64(), extra.len());
+    }
     out.extend(extra);
     let _ = job;
     Ok(out)
@@ -193,7 +203,7 @@ pub fn passes(job: &Job, geom: &LayerGeom, params: &Params) -> Result<Vec<Pass>>
 /// The finishing contour passes (walls at exactly the tool radius plus the fitting margin).
 pub fn finish_passes(job: &Job, regions: &Regions, params: &Params) -> Vec<Pass> {
     let r = job.radius();
-    let level = r + params.arc_tol + 0.001;
+    let level = r + wall_margin(params);
     let touch = regions.material.offset(r + TOUCH_MARGIN, REGION_TOL);
     offset::level_passes(&regions.keep, level, &touch, params, true, PassKind::Finish)
 }

@@ -14,6 +14,10 @@ use super::{LayerGeom, OffsetOrder, Params, Pass, PassKind};
 use crate::geom::{Area, DVec2};
 use crate::model::REGION_TOL;
 
+/// Tolerance of the simplification between grown levels (mm). Levels past the wall contour are
+/// at least a stepover from the walls, so this only moves them by micrometres.
+pub const GROW_SIMPLIFY: f64 = 0.002;
+
 /// Offset passes for one level.
 pub fn passes(g: &LayerGeom, params: &Params) -> Vec<Pass> {
     let mut out = Vec::new();
@@ -39,17 +43,24 @@ pub fn passes(g: &LayerGeom, params: &Params) -> Vec<Pass> {
         }
         return out;
     }
-    let mut k = 0usize;
+    // levels grow one from the other: offsetting a finely divided outline by a large distance
+    // makes every segment's offset overlap many others, while a stepover at a time stays cheap
+    // (for disks (A ⊕ a) ⊕ b = A ⊕ (a + b)). Each grown level is simplified within
+    // GROW_SIMPLIFY before the next step, or the round joins would double its vertices every
+    // level; the wall contour (level 0) is exact.
     let mut levels: Vec<Vec<Pass>> = Vec::new();
+    let mut grown = g.keep.offset(g.wall_level, REGION_TOL);
+    let mut k = 0usize;
     loop {
         let level = g.wall_level + k as f64 * g.step;
-        let ps = level_passes(&g.keep, level, &g.touch, params, inside_out, if k == 0 { PassKind::Contour } else { PassKind::Clear });
-        if ps.is_empty() {
-            // the grown walls may still have rings beyond the material: stop once the grown
-            // walls cover everything the tool could touch
-            if g.touch.difference(&g.keep.offset(level, REGION_TOL)).without_slivers(1e-6).is_empty() || k > 100_000 {
-                break;
-            }
+        if k > 0 {
+            grown = grown.simplified(GROW_SIMPLIFY).offset(g.step, REGION_TOL);
+        }
+        let kind = if k == 0 { PassKind::Contour } else { PassKind::Clear };
+        let ps = ring_passes(&grown, level, &g.touch, params, inside_out, kind);
+        if ps.is_empty() && (g.touch.difference(&grown).without_slivers(1e-6).is_empty() || k > 100_000) {
+            // the grown walls cover everything the tool could touch
+            break;
         }
         levels.push(ps);
         k += 1;
@@ -174,7 +185,11 @@ fn order_tree(levels: Vec<Vec<Pass>>, step: f64, inside_out: bool) -> Vec<Pass> 
 /// The passes at one offset level: rings of `keep` grown by `level`, clipped to `touch`,
 /// oriented for climb or conventional milling.
 pub fn level_passes(keep: &Area, level: f64, touch: &Area, params: &Params, toward_walls: bool, kind: PassKind) -> Vec<Pass> {
-    let grown = keep.offset(level, REGION_TOL);
+    ring_passes(&keep.offset(level, REGION_TOL), level, touch, params, toward_walls, kind)
+}
+
+/// The passes along the rings of `grown` (the walls grown by `level`), clipped to `touch`.
+pub fn ring_passes(grown: &Area, level: f64, touch: &Area, params: &Params, toward_walls: bool, kind: PassKind) -> Vec<Pass> {
     let mut out = Vec::new();
     for ring in grown.rings() {
         // rings of the grown walls have the walls on their left; cutting toward the walls
