@@ -305,6 +305,12 @@ impl Linker<'_> {
             self.push_line(MoveKind::Descend, start.extend(z), self.entry_feed);
             return;
         }
+        // a lateral entry: land in free or cleared space close by and come in sideways
+        // (paper 1 §4.5: entering tangent to the stock from free space before any plunge)
+        if let Some(p) = self.lateral_landing(start, z, 1.5 * r) {
+            self.land_and_approach(p, start, z);
+            return;
+        }
         // helix around the start
         let kd = self.sim.keep_distance(&Path::Line { a: start.extend(z), b: start.extend(z) }, 10.0 * r);
         let room = kd - r - self.params.arc_tol - 0.005;
@@ -326,10 +332,50 @@ impl Linker<'_> {
             self.ramp(&prefix, top_r + approach, z);
             return;
         }
+        // a longer way in sideways before a plunge
+        if let Some(p) = self.lateral_landing(start, z, 4.0 * r) {
+            self.land_and_approach(p, start, z);
+            return;
+        }
         // nothing fits: plunge
         self.travel(start, top + approach);
         self.tp.note("plunge: no room for a helix or a ramp");
         self.push_line(MoveKind::Plunge, start.extend(z), self.entry_feed);
+    }
+
+    /// The nearest point within `max` of `start` where the tool can land at `z` (no material
+    /// within its radius) and from which a straight move to `start` does not touch the part.
+    fn lateral_landing(&self, start: DVec2, z: f64, max: f64) -> Option<DVec2> {
+        let r = self.r;
+        let mut best: Option<(f64, DVec2)> = None;
+        for ring in 1..=8 {
+            let d = max * ring as f64 / 8.0;
+            for k in 0..24 {
+                let a = std::f64::consts::TAU * k as f64 / 24.0;
+                let p = start + d * DVec2::new(a.cos(), a.sin());
+                if self.top_near(p, r + crate::strategy::LANDING_MARGIN) > z + 0.01 {
+                    continue;
+                }
+                if self.keep_safe(p, start, z) && best.is_none_or(|b| d < b.0) {
+                    best = Some((d, p));
+                }
+            }
+            if best.is_some() {
+                break;
+            }
+        }
+        best.map(|b| b.1)
+    }
+
+    /// Lands at `p` and cuts sideways to `start`.
+    fn land_and_approach(&mut self, p: DVec2, start: DVec2, z: f64) {
+        let approach = self.params.approach;
+        let top = self.top_near(p, self.r + crate::strategy::LANDING_MARGIN);
+        let h = (z + approach).max(if top.is_finite() { top + approach } else { z + approach });
+        self.travel(p, h);
+        self.push_line(MoveKind::Descend, p.extend(z), self.entry_feed);
+        self.tp.note("lateral entry");
+        self.push_line(MoveKind::Cut, start.extend(z), self.feed);
     }
 
     fn helix(&mut self, c: DVec2, rh: f64, z_from: f64, z: f64, pts: &[DVec2]) {

@@ -129,14 +129,17 @@ pub fn svg(f: &Figure) -> String {
         let bucket = |t: f32| if t <= 0.0 { -1 } else { (t / 10.0) as i32 };
         let b0 = bucket(samples[i].tea);
         let mut j = i;
-        let mut d = String::new();
         let start = if i > 0 && samples[i - 1].mi == samples[i].mi { samples[i - 1].at } else { samples[i].at };
-        let p = map(start.truncate());
-        let _ = write!(d, "M{:.2},{:.2}", p.0, p.1);
+        let mut run = vec![DVec2::from(map(start.truncate()))];
         while j < samples.len() && bucket(samples[j].tea) == b0 && (j == i || samples[j].mi.abs_diff(samples[j - 1].mi) <= 1) {
-            let p = map(samples[j].at.truncate());
-            let _ = write!(d, " L{:.2},{:.2}", p.0, p.1);
+            run.push(DVec2::from(map(samples[j].at.truncate())));
             j += 1;
+        }
+        // a third of a pixel is invisible: keep the file small
+        let run = crate::geom::simplify::douglas_peucker(&run, 0.3);
+        let mut d = String::new();
+        for (k, p) in run.iter().enumerate() {
+            let _ = write!(d, "{}{:.1},{:.1}", if k == 0 { "M" } else { " L" }, p.x, p.y);
         }
         let tea = if b0 < 0 { 0.0 } else { b0 as f64 * 10.0 + 5.0 };
         let _ = writeln!(o, r#"<path d="{d}" fill="none" stroke="{}" stroke-width="{width:.2}" stroke-linejoin="round"/>"#, hex(tea_color(tea)));
