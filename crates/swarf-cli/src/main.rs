@@ -84,7 +84,7 @@ struct CommonOpts {
     #[arg(long, value_name = "MM_PER_MIN", allow_negative_numbers = true)]
     feed: Option<f64>,
     /// Spindle speed, rpm.
-    #[arg(long, value_name = "RPM")]
+    #[arg(long, value_name = "RPM", allow_negative_numbers = true)]
     spindle: Option<f64>,
     /// Controller dialect.
     #[arg(long, value_enum, default_value = "linuxcnc")]
@@ -108,13 +108,13 @@ struct CommonOpts {
     #[arg(long, value_name = "DEG", default_value_t = 3.0, allow_negative_numbers = true)]
     ramp_angle: f64,
     /// Arc-fitting tolerance, mm.
-    #[arg(long, value_name = "MM", default_value_t = 0.002)]
+    #[arg(long, value_name = "MM", default_value_t = 0.002, allow_negative_numbers = true)]
     arc_tolerance: f64,
     /// Clearance above the top of the job for travel, mm.
-    #[arg(long, value_name = "MM", default_value_t = 5.0)]
+    #[arg(long, value_name = "MM", default_value_t = 5.0, allow_negative_numbers = true)]
     clearance: f64,
     /// Simulation cell size, mm (default: tool diameter / 100 within [0.02, 0.1]).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     res: Option<f64>,
     /// Skip the simulation (no engagement, gouge or rest figures).
     #[arg(long)]
@@ -123,10 +123,10 @@ struct CommonOpts {
     #[arg(long, value_enum)]
     units: Option<UnitsArg>,
     /// SVG pixels per inch (96; old Inkscape files use 90).
-    #[arg(long, value_name = "PX", default_value_t = 96.0)]
+    #[arg(long, value_name = "PX", default_value_t = 96.0, allow_negative_numbers = true)]
     svg_dpi: f64,
     /// Tolerance for joining loose drawing entities into contours, mm.
-    #[arg(long, value_name = "MM", default_value_t = 0.01)]
+    #[arg(long, value_name = "MM", default_value_t = 0.01, allow_negative_numbers = true)]
     chain_tolerance: f64,
     /// No progress bar.
     #[arg(long, short)]
@@ -177,9 +177,16 @@ fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
-            let code = if e.use_stderr() { 2 } else { 0 };
-            let _ = e.print();
-            return ExitCode::from(code);
+            if !e.use_stderr() {
+                // --help, --version
+                let _ = e.print();
+                return ExitCode::SUCCESS;
+            }
+            // one line: the first line of clap's message, without its "error: " prefix
+            let text = e.to_string();
+            let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("bad arguments");
+            eprintln!("swarf: {} (see swarf --help)", first.trim_start_matches("error: "));
+            return ExitCode::from(2);
         }
     };
     let res = match cli.cmd {
@@ -248,6 +255,11 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
     if !(o.svg_dpi.is_finite() && o.svg_dpi > 0.0) {
         return Err(swarf::Error::param("--svg-dpi", "must be positive").into());
     }
+    if let Some(sp) = o.spindle
+        && !(sp.is_finite() && sp > 0.0)
+    {
+        return Err(swarf::Error::param("--spindle", format!("{sp} rpm: the spindle speed must be positive")).into());
+    }
     if !(o.chain_tolerance.is_finite() && o.chain_tolerance >= 0.0) {
         return Err(swarf::Error::param("--chain-tolerance", "must be zero or positive").into());
     }
@@ -266,7 +278,10 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
 fn run(job: &swarf::model::Job, opts: &RoughOptions, quiet: bool) -> Result<RoughResult, Failure> {
     let show = !quiet && std::io::stderr().is_terminal();
     let bar = if show { ProgressBar::new(1000) } else { ProgressBar::hidden() };
-    bar.set_style(ProgressStyle::with_template("{msg:>10} [{bar:40}] {percent:>3}%").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    bar.set_style(
+        ProgressStyle::with_template("{msg:>10} [{bar:40}] {percent:>3}%")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
     let res = swarf::pipeline::rough(job, opts, &mut |stage, f| {
         bar.set_message(match stage {
             Stage::Plan => "planning",
@@ -278,23 +293,43 @@ fn run(job: &swarf::model::Job, opts: &RoughOptions, quiet: bool) -> Result<Roug
     Ok(res?)
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same folder, so that a failure
-/// never leaves a half-written file.
-fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+/// A temporary file beside `path`.
+fn temp_for(path: &Path) -> PathBuf {
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
-    let tmp = dir.join(format!(".{name}.swarf-tmp-{}", std::process::id()));
+    dir.join(format!(".{name}.swarf-tmp-{}", std::process::id()))
+}
+
+/// Writes every file through a temporary file beside it and renames them only once all are
+/// written, so that a failure leaves neither a half-written file nor a missing one: existing
+/// outputs stay as they were.
+fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> anyhow::Result<()> {
+    let mut temps: Vec<PathBuf> = Vec::new();
     let res = (|| -> anyhow::Result<()> {
-        let mut f = std::fs::File::create(&tmp).with_context(|| format!("{}: cannot create", tmp.display()))?;
-        f.write_all(bytes).with_context(|| format!("{}: cannot write", tmp.display()))?;
-        f.sync_all().ok();
-        std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write", path.display()))?;
+        for (path, bytes) in files {
+            let tmp = temp_for(path);
+            let mut f = std::fs::File::create(&tmp).with_context(|| format!("{}: cannot create", path.display()))?;
+            temps.push(tmp);
+            f.write_all(bytes).with_context(|| format!("{}: cannot write", path.display()))?;
+            f.sync_all().ok();
+        }
         Ok(())
     })();
-    if res.is_err() {
-        let _ = std::fs::remove_file(&tmp);
+    if let Err(e) = res {
+        for t in &temps {
+            let _ = std::fs::remove_file(t);
+        }
+        return Err(e);
     }
-    res
+    for ((path, _), tmp) in files.iter().zip(&temps) {
+        if let Err(e) = std::fs::rename(tmp, path) {
+            for t in &temps {
+                let _ = std::fs::remove_file(t);
+            }
+            return Err(anyhow::anyhow!("{}: cannot write: {e}", path.display()));
+        }
+    }
+    Ok(())
 }
 
 struct Outputs {
@@ -309,7 +344,8 @@ fn write_outputs(job: &swarf::model::Job, res: &RoughResult, out: &Outputs) -> R
     // render everything first, then write: no output on failure
     let mut files: Vec<(PathBuf, Vec<u8>)> = vec![(out.gcode.clone(), res.gcode.clone().into_bytes())];
     if let Some(p) = &out.report {
-        let json = serde_json::to_string_pretty(&res.report).map_err(|e| Failure { user: false, msg: e.to_string() })?;
+        let json =
+            serde_json::to_string_pretty(&res.report).map_err(|e| Failure { user: false, msg: e.to_string() })?;
         files.push((p.clone(), (json + "\n").into_bytes()));
     }
     if let Some(p) = &out.samples {
@@ -325,7 +361,15 @@ fn write_outputs(job: &swarf::model::Job, res: &RoughResult, out: &Outputs) -> R
             };
             csv.push_str(&format!(
                 "{:.4},{:.4},{:.4},{:.4},{:.2},{:.2},{},{},{}\n",
-                sm.s, sm.at.x, sm.at.y, sm.at.z, sm.tea, sm.tea_pixel, kind, u8::from(sm.bore), sm.mi
+                sm.s,
+                sm.at.x,
+                sm.at.y,
+                sm.at.z,
+                sm.tea,
+                sm.tea_pixel,
+                kind,
+                u8::from(sm.bore),
+                sm.mi
             ));
         }
         files.push((p.clone(), csv.into_bytes()));
@@ -337,7 +381,13 @@ fn write_outputs(job: &swarf::model::Job, res: &RoughResult, out: &Outputs) -> R
         let fig = swarf::plot::Figure {
             title: format!(
                 "{} - {} - D{} - ref {:.0} deg - max {:.0} deg, p95 {:.0} deg - {:.2} min",
-                res.report.input, res.report.strategy, res.report.tool_diameter_mm, res.report.engagement_ref_deg, res.report.engagement_deg.max, res.report.engagement_deg.p95, res.report.time_min
+                res.report.input,
+                res.report.strategy,
+                res.report.tool_diameter_mm,
+                res.report.engagement_ref_deg,
+                res.report.engagement_deg.max,
+                res.report.engagement_deg.p95,
+                res.report.time_min
             ),
             part: &job.part,
             stock: &job.stock,
@@ -354,16 +404,7 @@ fn write_outputs(job: &swarf::model::Job, res: &RoughResult, out: &Outputs) -> R
             files.push((p.clone(), svg.into_bytes()));
         }
     }
-    let mut written: Vec<PathBuf> = Vec::new();
-    for (p, b) in &files {
-        if let Err(e) = write_atomic(p, b) {
-            for w in &written {
-                let _ = std::fs::remove_file(w);
-            }
-            return Err(e.into());
-        }
-        written.push(p.clone());
-    }
+    write_all_atomic(&files)?;
     Ok(())
 }
 
@@ -398,7 +439,11 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
         },
     };
     let res = run(&job, &opts, a.opts.quiet)?;
-    write_outputs(&job, &res, &Outputs { gcode, report: a.report.clone(), samples: a.samples.clone(), plot_svg, plot_png })?;
+    write_outputs(
+        &job,
+        &res,
+        &Outputs { gcode, report: a.report.clone(), samples: a.samples.clone(), plot_svg, plot_png },
+    )?;
     if !a.opts.quiet {
         eprintln!("{}", summary(&res.report));
     }
@@ -424,7 +469,10 @@ fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
         .with_context(|| format!("{}: cannot write", dir.display()))?;
     if !o.quiet {
         eprintln!("{}", summary(&res.report));
-        eprintln!("wrote {}/demo.ngc, demo.report.json, demo.svg, demo.png and the case demo_pocket.json", dir.display());
+        eprintln!(
+            "wrote {}/demo.ngc, demo.report.json, demo.svg, demo.png and the case demo_pocket.json",
+            dir.display()
+        );
     }
     Ok(())
 }

@@ -246,7 +246,12 @@ mod tests {
     #[test]
     fn reverse_keeps_area_magnitude_and_flips_sign() {
         let mut c = Contour {
-            vertices: vec![Vertex::new(0.0, 0.0), Vertex::with_bulge(10.0, 0.0, 0.5), Vertex::new(10.0, 10.0), Vertex::new(0.0, 10.0)],
+            vertices: vec![
+                Vertex::new(0.0, 0.0),
+                Vertex::with_bulge(10.0, 0.0, 0.5),
+                Vertex::new(10.0, 10.0),
+                Vertex::new(0.0, 10.0),
+            ],
             closed: true,
         };
         let a = c.signed_area();

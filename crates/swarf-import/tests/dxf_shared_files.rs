@@ -1,4 +1,4 @@
-//! Loads the sample DXFs of a swarf development checkout (`/work/shared/parts/dxf`, or the folder
+//! Loads the sample DXFs of a swarf development checkout (`../shared/parts/dxf` beside the checkout, or the folder
 //! in `SWARF_PARTS_DXF`), prints what was read and checks the known results. Ignored by default;
 //! skips when the folder is missing, as it is in a user's clone.
 //!
@@ -23,7 +23,7 @@ const EXPECTED: &[(&str, Result<usize, &str>)] = &[
 #[test]
 #[ignore = "needs the development sample files; prints a report"]
 fn load_shared_dxf_files() {
-    let dir = std::env::var_os("SWARF_PARTS_DXF").map(PathBuf::from).unwrap_or_else(|| "/work/shared/parts/dxf".into());
+    let dir = std::env::var_os("SWARF_PARTS_DXF").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/parts/dxf")));
     if !dir.is_dir() {
         eprintln!("{} is missing: nothing to check", dir.display());
         return;

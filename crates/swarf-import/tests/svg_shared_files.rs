@@ -1,4 +1,4 @@
-//! Loads the sample SVGs of a swarf development checkout (`/work/shared/parts/svg`, or the folder
+//! Loads the sample SVGs of a swarf development checkout (`../shared/parts/svg` beside the checkout, or the folder
 //! in `SWARF_PARTS_SVG`) and prints what was read. Ignored by default; skips when the folder is
 //! missing, as it is in a user's clone.
 //!
@@ -10,7 +10,7 @@ use swarf_import::{ImportOptions, read_drawing};
 #[test]
 #[ignore = "needs the development sample files; prints a report"]
 fn load_shared_svg_files() {
-    let dir = std::env::var_os("SWARF_PARTS_SVG").map(PathBuf::from).unwrap_or_else(|| "/work/shared/parts/svg".into());
+    let dir = std::env::var_os("SWARF_PARTS_SVG").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/parts/svg")));
     let Ok(entries) = std::fs::read_dir(&dir) else {
         eprintln!("{} is missing: nothing to check", dir.display());
         return;

@@ -61,10 +61,10 @@ impl Width {
     pub fn validate(self, place: &str) -> Result<()> {
         match self {
             Width::Stepover(s) if !(s > 0.0 && s <= 1.0) => {
-                Err(Error::param(place, format!("stepover {s} is outside (0, 1] (a fraction of the tool diameter)")))
+                Err(Error::param(place, format!("{s} is outside (0, 1] (a fraction of the tool diameter)")))
             }
             Width::EngagementDeg(t) if !(t > 0.0 && t <= 180.0) => {
-                Err(Error::param(place, format!("engagement {t}° is outside (0°, 180°]")))
+                Err(Error::param(place, format!("{t}° is outside (0°, 180°]")))
             }
             _ => Ok(()),
         }
@@ -160,6 +160,12 @@ impl Job {
         if !(self.feed.is_finite() && self.feed > 0.0) {
             return Err(Error::param("feed", format!("{} mm/min: the feed must be positive", self.feed)));
         }
+        if !(self.spindle_rpm.is_finite() && self.spindle_rpm > 0.0) {
+            return Err(Error::param(
+                "spindle speed",
+                format!("{} rpm: the spindle speed must be positive", self.spindle_rpm),
+            ));
+        }
         if !(self.rapid_rate.is_finite() && self.rapid_rate > 0.0) {
             return Err(Error::param("rapid_rate", "must be positive"));
         }
@@ -203,10 +209,7 @@ impl Job {
         let forbidden = self.part.union(&self.fixtures);
         let keep = if self.allowance > 0.0 { forbidden.offset(self.allowance, REGION_TOL) } else { forbidden };
         let material = self.stock.difference(&keep).without_slivers(1e-9);
-        let (lo, hi) = self
-            .stock
-            .bounds()
-            .ok_or_else(|| Error::param("stock", "the stock outline is empty"))?;
+        let (lo, hi) = self.stock.bounds().ok_or_else(|| Error::param("stock", "the stock outline is empty"))?;
         let (lo, hi) = match keep.bounds() {
             Some((a, b)) => (lo.min(a), hi.max(b)),
             None => (lo, hi),
@@ -218,7 +221,10 @@ impl Job {
         let touching = centres.intersection(&material.offset(r, REGION_TOL));
         let reachable = touching.offset(r, REGION_TOL).intersection(&material).without_slivers(1e-6);
         if material.is_empty() {
-            return Err(Error::param("stock", "there is no material to remove: the part and fixtures cover the whole stock"));
+            return Err(Error::param(
+                "stock",
+                "there is no material to remove: the part and fixtures cover the whole stock",
+            ));
         }
         if reachable.area() < 1e-6 {
             return Err(Error::param(

@@ -5,8 +5,8 @@ use crate::model::Job;
 use crate::plan;
 use crate::post::{self, Header, Post};
 use crate::report::{self, Report};
-use crate::sim::raster::{RasterSim, Replay};
 use crate::sim::SimOptions;
+use crate::sim::raster::{RasterSim, Replay};
 use crate::strategy::{self, LayerGeom, Params};
 use crate::toolpath::Toolpath;
 use std::time::Instant;
@@ -28,7 +28,13 @@ pub struct RoughOptions {
 
 impl Default for RoughOptions {
     fn default() -> Self {
-        Self { params: Params::default(), post: Post::LinuxCnc, sim: SimOptions::default(), simulate: true, input_name: String::new() }
+        Self {
+            params: Params::default(),
+            post: Post::LinuxCnc,
+            sim: SimOptions::default(),
+            simulate: true,
+            input_name: String::new(),
+        }
     }
 }
 
@@ -111,9 +117,13 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
     let compute_s = t0.elapsed().as_secs_f64();
     progress(Stage::Plan, 1.0);
     let mut header = Header { spindle_rpm: job.spindle_rpm, ..Default::default() };
-    header.lines.push(format!("job {} - strategy {}", if opts.input_name.is_empty() { &job.name } else { &opts.input_name }, opts.params.strategy.name()));
     header.lines.push(format!(
-        "stepover {:.1} pct = {:.1} deg straight-cut engagement, {} level(s) to z {:.3}, feed {:.0} mm/min",
+        "job {} - strategy {}",
+        if opts.input_name.is_empty() { &job.name } else { &opts.input_name },
+        opts.params.strategy.name()
+    ));
+    header.lines.push(format!(
+        "stepover {:.1} pct = {:.1} deg straight-cut engagement, {} levels to z {:.3}, feed {:.0} mm/min",
         job.width.stepover() * 100.0,
         job.width.engagement_deg(),
         zs.len(),

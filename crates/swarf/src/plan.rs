@@ -20,19 +20,27 @@ use crate::error::Result;
 use crate::geom::arcfit::{self, Piece};
 use crate::geom::{DVec2, DVec3, polyline_length};
 use crate::model::{Job, Regions};
+use crate::sim::SimOptions;
 use crate::sim::raster::RasterSim;
 use crate::sim::sweep::Path;
-use crate::sim::SimOptions;
 use crate::strategy::{Params, Pass, PassKind};
 use crate::toolpath::{MoveKind, Toolpath};
 
 /// Builds the program from the passes of each level (`levels[i] = (z, passes)`), then the
 /// finishing passes of each level.
-pub fn link(job: &Job, regions: &Regions, params: &Params, levels: &[(f64, Vec<Pass>)], finish: &[(f64, Vec<Pass>)], sim_opts: &SimOptions) -> Result<Toolpath> {
+pub fn link(
+    job: &Job,
+    regions: &Regions,
+    params: &Params,
+    levels: &[(f64, Vec<Pass>)],
+    finish: &[(f64, Vec<Pass>)],
+    sim_opts: &SimOptions,
+) -> Result<Toolpath> {
     let mut sim = RasterSim::new(job, regions, sim_opts)?;
     sim.track_exact = false;
     let safe_z = job.top() + params.clearance;
-    let first = levels.iter().flat_map(|l| l.1.iter()).next().and_then(|p| p.pts.first().copied()).unwrap_or(DVec2::ZERO);
+    let first =
+        levels.iter().flat_map(|l| l.1.iter()).next().and_then(|p| p.pts.first().copied()).unwrap_or(DVec2::ZERO);
     let tp = Toolpath::new(job.tool.clone(), DVec3::new(first.x, first.y, safe_z), safe_z);
     let mut l = Linker {
         job,
@@ -191,7 +199,8 @@ impl Linker<'_> {
             self.push_line(MoveKind::Rapid, cur.truncate().extend(z), 0.0);
         }
         let across = Path::Line { a: cur.truncate().extend(z), b: target.extend(z) };
-        let ok = z >= self.safe_z - 1e-9 || (self.sim.is_clear(&across, 0.5) && self.keep_safe(cur.truncate(), target, z));
+        let ok =
+            z >= self.safe_z - 1e-9 || (self.sim.is_clear(&across, 0.5) && self.keep_safe(cur.truncate(), target, z));
         if ok {
             self.push_line(MoveKind::Rapid, target.extend(z), 0.0);
         } else {
@@ -251,7 +260,8 @@ impl Linker<'_> {
                         self.push_line(MoveKind::Link, start.extend(z), self.feed);
                     }
                     arrived = true;
-                } else if len <= (1.5 * self.step).max(0.5 * self.r) || self.clear_until_near(cur.truncate(), start, z) {
+                } else if len <= (1.5 * self.step).max(0.5 * self.r) || self.clear_until_near(cur.truncate(), start, z)
+                {
                     // a short step, or a way through cleared space that only meets material
                     // on arriving: a lateral entry into the pass
                     self.push_line(MoveKind::Cut, start.extend(z), self.feed);
@@ -273,7 +283,9 @@ impl Linker<'_> {
         let nearest = pts
             .iter()
             .enumerate()
-            .min_by(|a, b| (*a.1 - cur.truncate()).length_squared().total_cmp(&(*b.1 - cur.truncate()).length_squared()))
+            .min_by(|a, b| {
+                (*a.1 - cur.truncate()).length_squared().total_cmp(&(*b.1 - cur.truncate()).length_squared())
+            })
             .map_or(0, |(k, _)| k);
         if self.down_at == Some(z) {
             return nearest;
@@ -327,7 +339,9 @@ impl Linker<'_> {
             let prefix = prefix_of(pts, want);
             let mut top_r = z;
             for w in prefix.windows(2) {
-                top_r = top_r.max(self.sim.max_height_near(&Path::Line { a: w[0].extend(0.0), b: w[1].extend(0.0) }, r + 0.05) as f64);
+                top_r = top_r
+                    .max(self.sim.max_height_near(&Path::Line { a: w[0].extend(0.0), b: w[1].extend(0.0) }, r + 0.05)
+                        as f64);
             }
             self.ramp(&prefix, top_r + approach, z);
             return;

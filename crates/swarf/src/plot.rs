@@ -101,7 +101,10 @@ pub fn svg(f: &Figure) -> String {
     let map = |p: DVec2| (ox + (p.x - lo.x) * s, oy + (hi.y - p.y) * s);
     let clip = Area::rect(lo.x, lo.y, hi.x, hi.y);
     let mut o = String::new();
-    let _ = writeln!(o, r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="DejaVu Sans, Arial, sans-serif">"#);
+    let _ = writeln!(
+        o,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="DejaVu Sans, Arial, sans-serif">"#
+    );
     let _ = writeln!(o, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
     let _ = writeln!(o, r#"<text x="20" y="30" font-size="18">{}</text>"#, xml(&f.title));
     // part, fixtures, stock
@@ -109,9 +112,17 @@ pub fn svg(f: &Figure) -> String {
     let _ = writeln!(o, r##"<path d="{}" fill="#3a3a3a" fill-rule="evenodd"/>"##, area_path(&part, &map));
     let fx = f.fixtures.intersection(&clip);
     if !fx.is_empty() {
-        let _ = writeln!(o, r##"<path d="{}" fill="#b03030" fill-opacity="0.7" fill-rule="evenodd"/>"##, area_path(&fx, &map));
+        let _ = writeln!(
+            o,
+            r##"<path d="{}" fill="#b03030" fill-opacity="0.7" fill-rule="evenodd"/>"##,
+            area_path(&fx, &map)
+        );
     }
-    let _ = writeln!(o, r##"<path d="{}" fill="none" stroke="#000" stroke-width="1.2" fill-rule="evenodd"/>"##, area_path(f.stock, &map));
+    let _ = writeln!(
+        o,
+        r##"<path d="{}" fill="none" stroke="#000" stroke-width="1.2" fill-rule="evenodd"/>"##,
+        area_path(f.stock, &map)
+    );
     // rapids dotted
     let mut d = String::new();
     for (from, m) in f.toolpath.segments() {
@@ -131,7 +142,10 @@ pub fn svg(f: &Figure) -> String {
         let mut j = i;
         let start = if i > 0 && samples[i - 1].mi == samples[i].mi { samples[i - 1].at } else { samples[i].at };
         let mut run = vec![DVec2::from(map(start.truncate()))];
-        while j < samples.len() && bucket(samples[j].tea) == b0 && (j == i || samples[j].mi.abs_diff(samples[j - 1].mi) <= 1) {
+        while j < samples.len()
+            && bucket(samples[j].tea) == b0
+            && (j == i || samples[j].mi.abs_diff(samples[j - 1].mi) <= 1)
+        {
             run.push(DVec2::from(map(samples[j].at.truncate())));
             j += 1;
         }
@@ -142,7 +156,11 @@ pub fn svg(f: &Figure) -> String {
             let _ = write!(d, "{}{:.1},{:.1}", if k == 0 { "M" } else { " L" }, p.x, p.y);
         }
         let tea = if b0 < 0 { 0.0 } else { b0 as f64 * 10.0 + 5.0 };
-        let _ = writeln!(o, r#"<path d="{d}" fill="none" stroke="{}" stroke-width="{width:.2}" stroke-linejoin="round"/>"#, hex(tea_color(tea)));
+        let _ = writeln!(
+            o,
+            r#"<path d="{d}" fill="none" stroke="{}" stroke-width="{width:.2}" stroke-linejoin="round"/>"#,
+            hex(tea_color(tea))
+        );
         i = j.max(i + 1);
     }
     // rest material: reachable material left standing
@@ -158,7 +176,13 @@ pub fn svg(f: &Figure) -> String {
     // start marker: circle of the tool at the first cutting point
     if let Some(first) = samples.first() {
         let p = map(first.at.truncate());
-        let _ = writeln!(o, r##"<circle cx="{:.2}" cy="{:.2}" r="{:.2}" fill="none" stroke="#222" stroke-width="1"/>"##, p.0, p.1, f.toolpath.tool.radius() * s);
+        let _ = writeln!(
+            o,
+            r##"<circle cx="{:.2}" cy="{:.2}" r="{:.2}" fill="none" stroke="#222" stroke-width="1"/>"##,
+            p.0,
+            p.1,
+            f.toolpath.tool.radius() * s
+        );
     }
     for pl in &f.replay.plunges {
         let p = map(DVec2::new(pl.at[0], pl.at[1]));
@@ -166,21 +190,41 @@ pub fn svg(f: &Figure) -> String {
     }
     for g in &f.replay.gouges {
         let p = map(DVec2::new(g.at[0], g.at[1]));
-        let _ = writeln!(o, r##"<path d="M{:.1},{:.1} l10,10 m0,-10 l-10,10" stroke="#f00" stroke-width="2.5"/>"##, p.0 - 5.0, p.1 - 5.0);
+        let _ = writeln!(
+            o,
+            r##"<path d="M{:.1},{:.1} l10,10 m0,-10 l-10,10" stroke="#f00" stroke-width="2.5"/>"##,
+            p.0 - 5.0,
+            p.1 - 5.0
+        );
     }
     // right panel: engagement against cutting length
     let (px0, px1, py0, py1) = (840.0, 1470.0, 80.0, 560.0);
     let total = samples.last().map_or(1.0, |s| s.s).max(1e-9);
     let ymap = |t: f64| py1 - (t.clamp(0.0, 200.0) / 200.0) * (py1 - py0);
     let xmap = |l: f64| px0 + l / total * (px1 - px0);
-    let _ = writeln!(o, r##"<rect x="{px0}" y="{py0}" width="{}" height="{}" fill="none" stroke="#000"/>"##, px1 - px0, py1 - py0);
+    let _ = writeln!(
+        o,
+        r##"<rect x="{px0}" y="{py0}" width="{}" height="{}" fill="none" stroke="#000"/>"##,
+        px1 - px0,
+        py1 - py0
+    );
     for t in [0.0, 45.0, 90.0, 135.0, 180.0] {
         let y = ymap(t);
-        let _ = writeln!(o, r##"<line x1="{px0}" x2="{px1}" y1="{y:.1}" y2="{y:.1}" stroke="#ddd"/><text x="{}" y="{:.1}" font-size="12" text-anchor="end">{t}°</text>"##, px0 - 6.0, y + 4.0);
+        let _ = writeln!(
+            o,
+            r##"<line x1="{px0}" x2="{px1}" y1="{y:.1}" y2="{y:.1}" stroke="#ddd"/><text x="{}" y="{:.1}" font-size="12" text-anchor="end">{t}°</text>"##,
+            px0 - 6.0,
+            y + 4.0
+        );
     }
     for (t, dash, label) in [(f.ref_deg, "", "reference"), (f.ref_deg + 20.0, "6,4", "reference + 20°")] {
         let y = ymap(t);
-        let _ = writeln!(o, r##"<line x1="{px0}" x2="{px1}" y1="{y:.1}" y2="{y:.1}" stroke="#1a7f37" stroke-width="1.2" stroke-dasharray="{dash}"/><text x="{}" y="{:.1}" font-size="11" fill="#1a7f37" text-anchor="end">{label}</text>"##, px1 - 4.0, y - 4.0);
+        let _ = writeln!(
+            o,
+            r##"<line x1="{px0}" x2="{px1}" y1="{y:.1}" y2="{y:.1}" stroke="#1a7f37" stroke-width="1.2" stroke-dasharray="{dash}"/><text x="{}" y="{:.1}" font-size="11" fill="#1a7f37" text-anchor="end">{label}</text>"##,
+            px1 - 4.0,
+            y - 4.0
+        );
     }
     // engagement curve, reduced to at most ~3000 columns of min/max
     let cols = 1500usize;
@@ -200,16 +244,38 @@ pub fn svg(f: &Figure) -> String {
         }
     }
     let _ = writeln!(o, r##"<path d="{d}" fill="none" stroke="#1f4e9c" stroke-width="0.8"/>"##);
-    let _ = writeln!(o, r#"<text x="{}" y="{}" font-size="13" text-anchor="middle">cutting length (mm), total {:.0}</text>"#, (px0 + px1) / 2.0, py1 + 32.0, total);
-    let _ = writeln!(o, r#"<text x="{}" y="{}" font-size="13" transform="rotate(-90 {} {})" text-anchor="middle">engagement (°)</text>"#, px0 - 44.0, (py0 + py1) / 2.0, px0 - 44.0, (py0 + py1) / 2.0);
+    let _ = writeln!(
+        o,
+        r#"<text x="{}" y="{}" font-size="13" text-anchor="middle">cutting length (mm), total {:.0}</text>"#,
+        (px0 + px1) / 2.0,
+        py1 + 32.0,
+        total
+    );
+    let _ = writeln!(
+        o,
+        r#"<text x="{}" y="{}" font-size="13" transform="rotate(-90 {} {})" text-anchor="middle">engagement (°)</text>"#,
+        px0 - 44.0,
+        (py0 + py1) / 2.0,
+        px0 - 44.0,
+        (py0 + py1) / 2.0
+    );
     // colour key
     for k in 0..18 {
         let t = k as f64 * 10.0 + 5.0;
-        let _ = writeln!(o, r#"<rect x="{}" y="610" width="24" height="10" fill="{}"/>"#, 20.0 + k as f64 * 24.0, hex(tea_color(t)));
+        let _ = writeln!(
+            o,
+            r#"<rect x="{}" y="610" width="24" height="10" fill="{}"/>"#,
+            20.0 + k as f64 * 24.0,
+            hex(tea_color(t))
+        );
     }
-    let _ = writeln!(o, r#"<text x="20" y="634" font-size="11">0°</text><text x="452" y="634" font-size="11" text-anchor="end">180°</text><text x="470" y="620" font-size="11">engagement; grey: no engagement; dotted: rapids; red: material left</text>"#);
+    let _ = writeln!(
+        o,
+        r#"<text x="20" y="634" font-size="11">0°</text><text x="452" y="634" font-size="11" text-anchor="end">180°</text><text x="470" y="620" font-size="11">engagement; grey: no engagement; dotted: rapids; red: material left</text>"#
+    );
     let arcs = f.toolpath.moves.iter().filter(|m| matches!(m.motion, Motion::Arc { .. })).count();
-    let _ = writeln!(o, r#"<text x="840" y="30" font-size="13">{} moves, {} arcs</text>"#, f.toolpath.moves.len(), arcs);
+    let _ =
+        writeln!(o, r#"<text x="840" y="30" font-size="13">{} moves, {} arcs</text>"#, f.toolpath.moves.len(), arcs);
     o.push_str("</svg>\n");
     o
 }
@@ -222,9 +288,11 @@ fn xml(s: &str) -> String {
 pub fn png(svg_text: &str) -> Result<Vec<u8>> {
     let mut opt = resvg::usvg::Options::default();
     opt.fontdb_mut().load_system_fonts();
-    let tree = resvg::usvg::Tree::from_str(svg_text, &opt).map_err(|e| Error::param("plot", format!("cannot render the picture: {e}")))?;
+    let tree = resvg::usvg::Tree::from_str(svg_text, &opt)
+        .map_err(|e| Error::param("plot", format!("cannot render the picture: {e}")))?;
     let size = tree.size().to_int_size();
-    let mut pix = resvg::tiny_skia::Pixmap::new(size.width(), size.height()).ok_or_else(|| Error::param("plot", "empty picture"))?;
+    let mut pix = resvg::tiny_skia::Pixmap::new(size.width(), size.height())
+        .ok_or_else(|| Error::param("plot", "empty picture"))?;
     resvg::render(&tree, resvg::tiny_skia::Transform::identity(), &mut pix.as_mut());
     pix.encode_png().map_err(|e| Error::param("plot", format!("cannot encode PNG: {e}")))
 }

@@ -188,10 +188,12 @@ mod tests {
     use super::*;
 
     fn arc_pts(c: DVec2, r: f64, a0: f64, a1: f64, n: usize) -> Vec<DVec2> {
-        (0..=n).map(|i| {
-            let t = a0 + (a1 - a0) * i as f64 / n as f64;
-            c + r * DVec2::new(t.cos(), t.sin())
-        }).collect()
+        (0..=n)
+            .map(|i| {
+                let t = a0 + (a1 - a0) * i as f64 / n as f64;
+                c + r * DVec2::new(t.cos(), t.sin())
+            })
+            .collect()
     }
 
     #[test]
@@ -233,10 +235,12 @@ mod tests {
     #[test]
     fn output_stays_within_tolerance() {
         // a noisy wavy polyline: every fitted piece must stay within tol of the input points
-        let pts: Vec<DVec2> = (0..500).map(|i| {
-            let t = i as f64 * 0.05;
-            DVec2::new(t, (t * 0.7).sin() * 3.0 + ((i * 7919) % 13) as f64 * 1e-4)
-        }).collect();
+        let pts: Vec<DVec2> = (0..500)
+            .map(|i| {
+                let t = i as f64 * 0.05;
+                DVec2::new(t, (t * 0.7).sin() * 3.0 + ((i * 7919) % 13) as f64 * 1e-4)
+            })
+            .collect();
         let tol = 0.01;
         let f = fit(&pts, tol);
         assert!(f.len() < 200, "{}", f.len());

@@ -214,11 +214,8 @@ impl Area {
     /// Every ring simplified by Douglas–Peucker within `tol`, then re-normalised (rings keep
     /// their orientation, so holes stay holes).
     pub fn simplified(&self, tol: f64) -> Area {
-        let rings: Vec<Vec<DVec2>> = self
-            .rings()
-            .map(|r| super::simplify::douglas_peucker_ring(r, tol))
-            .filter(|r| r.len() >= 3)
-            .collect();
+        let rings: Vec<Vec<DVec2>> =
+            self.rings().map(|r| super::simplify::douglas_peucker_ring(r, tol)).filter(|r| r.len() >= 3).collect();
         Area::from_rings(&rings, Fill::NonZero)
     }
 
@@ -334,8 +331,13 @@ mod tests {
     fn coincident_edges_are_robust() {
         // a frame whose hole is exactly the stock: stock minus frame is the stock
         let stock = Area::rect(0.0, 0.0, 60.0, 20.0);
-        let frame = Area::from_rings(&[sq(-8.0, -8.0, 76.0), vec![
-            DVec2::new(0.0, 0.0), DVec2::new(60.0, 0.0), DVec2::new(60.0, 20.0), DVec2::new(0.0, 20.0)]], Fill::EvenOdd);
+        let frame = Area::from_rings(
+            &[
+                sq(-8.0, -8.0, 76.0),
+                vec![DVec2::new(0.0, 0.0), DVec2::new(60.0, 0.0), DVec2::new(60.0, 20.0), DVec2::new(0.0, 20.0)],
+            ],
+            Fill::EvenOdd,
+        );
         let m = stock.difference(&frame);
         assert!((m.area() - 1200.0).abs() < 1e-6, "{}", m.area());
         assert_eq!(m.polys.len(), 1);
@@ -346,10 +348,14 @@ mod tests {
         // shrink an L shape by 3: every vertex of the result is at least 3 from the boundary,
         // and at most 3 + tol from it along straight edges
         let l = vec![
-            DVec2::new(0.0, 0.0), DVec2::new(60.0, 0.0), DVec2::new(60.0, 20.0),
-            DVec2::new(20.0, 20.0), DVec2::new(20.0, 60.0), DVec2::new(0.0, 60.0),
+            DVec2::new(0.0, 0.0),
+            DVec2::new(60.0, 0.0),
+            DVec2::new(60.0, 20.0),
+            DVec2::new(20.0, 20.0),
+            DVec2::new(20.0, 60.0),
+            DVec2::new(0.0, 60.0),
         ];
-        let a = Area::from_rings(&[l.clone()], Fill::NonZero);
+        let a = Area::from_rings(std::slice::from_ref(&l), Fill::NonZero);
         let tol = 0.001;
         let e = a.offset(-3.0, tol);
         let idx = EdgeIndex::from_rings([&l].into_iter(), 2.0);

@@ -68,10 +68,12 @@ mod tests {
 
     #[test]
     fn keeps_shape_within_tolerance() {
-        let pts: Vec<DVec2> = (0..=1000).map(|i| {
-            let t = i as f64 / 1000.0 * std::f64::consts::PI;
-            DVec2::new(10.0 * t.cos(), 10.0 * t.sin())
-        }).collect();
+        let pts: Vec<DVec2> = (0..=1000)
+            .map(|i| {
+                let t = i as f64 / 1000.0 * std::f64::consts::PI;
+                DVec2::new(10.0 * t.cos(), 10.0 * t.sin())
+            })
+            .collect();
         let s = douglas_peucker(&pts, 0.01);
         assert!(s.len() < 80 && s.len() > 30, "{}", s.len());
         assert_eq!(s.first(), pts.first());
@@ -83,10 +85,12 @@ mod tests {
         // a straight line collapses to its ends
         let line: Vec<DVec2> = (0..50).map(|i| DVec2::new(i as f64, 2.0 * i as f64)).collect();
         assert_eq!(douglas_peucker(&line, 1e-9).len(), 2);
-        let ring: Vec<DVec2> = (0..400).map(|i| {
-            let t = i as f64 / 400.0 * std::f64::consts::TAU;
-            DVec2::new(5.0 * t.cos(), 5.0 * t.sin())
-        }).collect();
+        let ring: Vec<DVec2> = (0..400)
+            .map(|i| {
+                let t = i as f64 / 400.0 * std::f64::consts::TAU;
+                DVec2::new(5.0 * t.cos(), 5.0 * t.sin())
+            })
+            .collect();
         let r = douglas_peucker_ring(&ring, 0.005);
         assert!(r.len() < 150 && r.len() >= 60, "{}", r.len());
     }

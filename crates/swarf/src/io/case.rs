@@ -37,13 +37,15 @@ impl Ctx {
     }
 
     fn ring(&self, v: &Value, place: &str) -> Result<Vec<DVec2>> {
-        let arr = v.as_array().ok_or_else(|| self.err(place, format!("expected a list of points, found {}", short(v))))?;
+        let arr =
+            v.as_array().ok_or_else(|| self.err(place, format!("expected a list of points, found {}", short(v))))?;
         let mut pts = Vec::with_capacity(arr.len());
         for (i, p) in arr.iter().enumerate() {
             let pl = format!("{place}[{i}]");
-            let xy = p.as_array().filter(|a| a.len() == 2 || a.len() == 3).ok_or_else(|| {
-                self.err(&pl, format!("expected a point [x, y] of two numbers, found {}", short(p)))
-            })?;
+            let xy = p
+                .as_array()
+                .filter(|a| a.len() == 2 || a.len() == 3)
+                .ok_or_else(|| self.err(&pl, format!("expected a point [x, y] of two numbers, found {}", short(p))))?;
             let x = self.num(&xy[0], &pl)?;
             let y = self.num(&xy[1], &pl)?;
             pts.push(DVec2::new(x, y) * self.scale);
@@ -52,7 +54,9 @@ impl Ctx {
             pts.pop();
         }
         if pts.len() < 3 {
-            return Err(self.err(place, format!("a closed outline needs at least 3 distinct points, found {}", pts.len())));
+            return Err(
+                self.err(place, format!("a closed outline needs at least 3 distinct points, found {}", pts.len()))
+            );
         }
         if crate::geom::ring_area(&pts).abs() < 1e-12 {
             return Err(self.err(place, "the outline has no area (all points on one line)"));
@@ -62,7 +66,8 @@ impl Ctx {
 
     /// `[{"outer": ring, "holes": [ring...]}, ...]` (union) or `[ring, ring, ...]` (even-odd).
     fn polygons(&self, v: &Value, place: &str) -> Result<Area> {
-        let arr = v.as_array().ok_or_else(|| self.err(place, format!("expected a list of polygons, found {}", short(v))))?;
+        let arr =
+            v.as_array().ok_or_else(|| self.err(place, format!("expected a list of polygons, found {}", short(v))))?;
         if arr.is_empty() {
             return Ok(Area::empty());
         }
@@ -89,7 +94,8 @@ impl Ctx {
                 .collect::<Result<Vec<_>>>()?;
             Ok(Area::from_rings(&rings, Fill::EvenOdd))
         } else {
-            Err(self.err(place, "expected either polygons {\"outer\": …, \"holes\": …} or rings [[x, y], …], not a mix"))
+            Err(self
+                .err(place, "expected either polygons {\"outer\": …, \"holes\": …} or rings [[x, y], …], not a mix"))
         }
     }
 }
@@ -101,7 +107,7 @@ fn short(v: &Value) -> String {
 
 /// Reads a case file.
 pub fn read_case(path: &Path) -> Result<Job> {
-    let text = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+    let text = std::fs::read(path).map_err(|e| Error::input(path, "file", format!("cannot read: {e}")))?;
     parse_case(path, &text)
 }
 
@@ -115,7 +121,11 @@ pub fn parse_case(path: &Path, bytes: &[u8]) -> Result<Job> {
         Error::input(&file, format!("line {} column {}", e.line(), e.column()), format!("not valid JSON: {e}"))
     })?;
     if !root.is_object() {
-        return Err(Error::input(&file, "top level", "a case is a JSON object {\"stock\": …, \"part\": …, \"tool\": …}"));
+        return Err(Error::input(
+            &file,
+            "top level",
+            "a case is a JSON object {\"stock\": …, \"part\": …, \"tool\": …}",
+        ));
     }
     let units = root.get("units").and_then(Value::as_str).unwrap_or("mm");
     let scale = match units {
@@ -131,7 +141,9 @@ pub fn parse_case(path: &Path, bytes: &[u8]) -> Result<Job> {
         ));
     }
     let stock_v = root.get("stock").ok_or_else(|| cx.err("stock", "missing: the raw stock outline [[x, y], …]"))?;
-    let stock = if stock_v.as_array().is_some_and(|a| a.first().is_some_and(Value::is_array) && a.first().and_then(|p| p.get(0)).is_some_and(Value::is_number)) {
+    let stock = if stock_v.as_array().is_some_and(|a| {
+        a.first().is_some_and(Value::is_array) && a.first().and_then(|p| p.get(0)).is_some_and(Value::is_number)
+    }) {
         Area::from_rings(&[cx.ring(stock_v, "stock")?], Fill::NonZero)
     } else {
         cx.polygons(stock_v, "stock")?
@@ -150,7 +162,8 @@ pub fn parse_case(path: &Path, bytes: &[u8]) -> Result<Job> {
     {
         return Err(cx.err("tool.type", format!("{t:?}: only flat end mills are supported")));
     }
-    let diameter = cx.num(tool.get("diameter").ok_or_else(|| cx.err("tool.diameter", "missing"))?, "tool.diameter")? * scale;
+    let diameter =
+        cx.num(tool.get("diameter").ok_or_else(|| cx.err("tool.diameter", "missing"))?, "tool.diameter")? * scale;
     let stock_top = cx.opt_num(&root, "stock_top")?.unwrap_or(0.0) * scale;
     let part_top = cx.opt_num(&root, "part_top")?.map_or(stock_top, |v| v * scale);
     let floor = cx.opt_num(&root, "floor")?.ok_or_else(|| cx.err("floor", "missing: the depth to clear to"))? * scale;
@@ -170,6 +183,16 @@ pub fn parse_case(path: &Path, bytes: &[u8]) -> Result<Job> {
     let feed = cx.opt_num(&root, "feed_default")?.unwrap_or(1000.0) * scale;
     let rapid_rate = cx.opt_num(&root, "rapid_rate")?.unwrap_or(5000.0) * scale;
     let spindle_rpm = cx.opt_num(&root, "spindle_rpm")?.unwrap_or(10000.0);
+    for (key, v) in [("spindle_rpm", spindle_rpm), ("feed_default", feed), ("rapid_rate", rapid_rate)] {
+        if v.is_nan() || v <= 0.0 {
+            return Err(cx.err(key, format!("{v}: must be a positive number")));
+        }
+    }
+    if let Some(sd) = stepdown
+        && (sd.is_nan() || sd <= 0.0)
+    {
+        return Err(cx.err("stepdown", format!("{sd} mm: the step-down must be positive")));
+    }
     if stock.is_empty() {
         return Err(cx.err("stock", "the stock outline has no area"));
     }
@@ -215,9 +238,12 @@ mod tests {
 
     #[test]
     fn reads_a_pocket() {
-        let j = parse(r#"{"units":"mm","tool":{"diameter":6,"type":"flat"},"stock":[[0,0],[60,0],[60,20],[0,20]],
+        let j = parse(
+            r#"{"units":"mm","tool":{"diameter":6,"type":"flat"},"stock":[[0,0],[60,0],[60,20],[0,20]],
             "part":[{"outer":[[-8,-8],[68,-8],[68,28],[-8,28]],"holes":[[[0,0],[60,0],[60,20],[0,20]]]}],
-            "floor":-5,"engagement_deg":90}"#).unwrap();
+            "floor":-5,"engagement_deg":90}"#,
+        )
+        .unwrap();
         assert_eq!(j.tool.diameter, 6.0);
         assert!((j.stock.area() - 1200.0).abs() < 1e-9);
         assert!((j.part.area() - (76.0 * 36.0 - 1200.0)).abs() < 1e-6);

@@ -36,7 +36,7 @@ pub fn load_job(path: &Path, ov: &Overrides) -> Result<Job> {
         "json" => case::read_case(path)?,
         "dxf" | "svg" => drawing::job_from_drawing(&swarf_import::read_drawing(path, &ov.import)?, ov)?,
         _ => {
-            let bytes = std::fs::read(path).map_err(|e| Error::Io { path: path.to_path_buf(), source: e })?;
+            let bytes = std::fs::read(path).map_err(|e| Error::input(path, "file", format!("cannot read: {e}")))?;
             let head = String::from_utf8_lossy(&bytes[..bytes.len().min(512)]).trim_start().to_string();
             if head.starts_with('{') {
                 case::read_case(path)?

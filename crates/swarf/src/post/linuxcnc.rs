@@ -24,4 +24,3 @@ impl Dialect for LinuxCnc {
         vec!["M2".into()]
     }
 }
-

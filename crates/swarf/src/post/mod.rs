@@ -79,8 +79,15 @@ pub fn num(v: f64, dec: usize) -> String {
     s
 }
 
+fn round_to(v: f64, step: f64) -> f64 {
+    (v / step).round() * step
+}
+
 fn comment(text: &str) -> String {
-    let clean: String = text.chars().map(|c| if c == '(' || c == ')' || !c.is_ascii() || c.is_ascii_control() { ' ' } else { c }).collect();
+    let clean: String = text
+        .chars()
+        .map(|c| if c == '(' || c == ')' || !c.is_ascii() || c.is_ascii_control() { ' ' } else { c })
+        .collect();
     format!("({})", clean.trim())
 }
 
@@ -143,7 +150,9 @@ pub fn write(tp: &Toolpath, post: Post, header: &Header) -> String {
             Motion::Arc { center, ccw } => {
                 w.push_str(if ccw { "G3" } else { "G2" });
                 axes(&mut w, pos, m.to, true);
-                let _ = write!(w, " I{} J{}", num(center.x - pos.x, 5), num(center.y - pos.y, 5));
+                // the controller starts the arc where the previous line ended, as written
+                let (px, py) = (round_to(pos.x, COORD_STEP), round_to(pos.y, COORD_STEP));
+                let _ = write!(w, " I{} J{}", num(center.x - px, 5), num(center.y - py, 5));
             }
         }
         if !m.is_rapid() {

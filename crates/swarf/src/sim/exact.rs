@@ -312,7 +312,16 @@ fn ring_segment_crossings(c: DVec2, rho: f64, a: DVec2, b: DVec2, base: f64, out
 /// Appends to `covered` the front-half angular intervals of the ring inside the sweep of `path`
 /// with tool radius `r`.
 #[allow(clippy::too_many_arguments)]
-fn covered_intervals(path: &Path, fast: &Fast, r: f64, c: DVec2, rho: f64, base: f64, scratch: &mut Vec<f64>, covered: &mut Vec<(f64, f64)>) {
+fn covered_intervals(
+    path: &Path,
+    fast: &Fast,
+    r: f64,
+    c: DVec2,
+    rho: f64,
+    base: f64,
+    scratch: &mut Vec<f64>,
+    covered: &mut Vec<(f64, f64)>,
+) {
     // quick reject: the ring cannot meet the sweep
     let d = fast.distance(c);
     if d > rho + r {
@@ -389,7 +398,12 @@ mod tests {
     use crate::geom::DVec3;
 
     fn model(r: f64) -> ExactModel {
-        let stock = vec![DVec2::new(-100.0, -100.0), DVec2::new(100.0, -100.0), DVec2::new(100.0, 100.0), DVec2::new(-100.0, 100.0)];
+        let stock = vec![
+            DVec2::new(-100.0, -100.0),
+            DVec2::new(100.0, -100.0),
+            DVec2::new(100.0, 100.0),
+            DVec2::new(-100.0, 100.0),
+        ];
         ExactModel::new(r, DVec2::new(-110.0, -110.0), DVec2::new(110.0, 110.0), vec![stock], 0.0, 0.05)
     }
 

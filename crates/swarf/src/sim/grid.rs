@@ -70,7 +70,12 @@ impl Grid {
         if i1 < 0.0 || j1 < 0.0 || i0 >= self.nx as f64 || j0 >= self.ny as f64 || i0 > i1 || j0 > j1 {
             return None;
         }
-        Some((i0.max(0.0) as usize, (i1 as usize).min(self.nx - 1), j0.max(0.0) as usize, (j1 as usize).min(self.ny - 1)))
+        Some((
+            i0.max(0.0) as usize,
+            (i1 as usize).min(self.nx - 1),
+            j0.max(0.0) as usize,
+            (j1 as usize).min(self.ny - 1),
+        ))
     }
 
     /// Exact even-odd fill of `area` at cell centres.

@@ -238,7 +238,15 @@ impl Fast {
                 let u0 = DVec2::new(g.a0.cos(), g.a0.sin());
                 let a1 = g.a0 + g.sweep;
                 let u1 = DVec2::new(a1.cos(), a1.sin());
-                Fast::Arc { c: g.center, r: g.radius, u0, u1, p0: g.center + g.radius * u0, p1: g.center + g.radius * u1, sweep: g.sweep }
+                Fast::Arc {
+                    c: g.center,
+                    r: g.radius,
+                    u0,
+                    u1,
+                    p0: g.center + g.radius * u0,
+                    p1: g.center + g.radius * u1,
+                    sweep: g.sweep,
+                }
             }
         }
     }
@@ -299,7 +307,7 @@ pub fn angle_in_sweep(ang: f64, a0: f64, sweep: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::toolpath::{MoveKind, Motion};
+    use crate::toolpath::{Motion, MoveKind};
 
     #[test]
     fn line_and_arc_reach() {
@@ -312,7 +320,12 @@ mod tests {
         assert!(p.reach_zmin(DVec2::new(5.0, 6.0), 5.0).is_none());
         // half circle ccw of radius 10 from (10,0) to (-10,0): the point (0,-10) is 20 from
         // the top and reachable only near the ends with rho = 14.15
-        let m = Move { kind: MoveKind::Cut, motion: Motion::Arc { center: DVec2::ZERO, ccw: true }, to: DVec3::new(-10.0, 0.0, 0.0), feed: 1.0 };
+        let m = Move {
+            kind: MoveKind::Cut,
+            motion: Motion::Arc { center: DVec2::ZERO, ccw: true },
+            to: DVec3::new(-10.0, 0.0, 0.0),
+            feed: 1.0,
+        };
         let a = Path::of(DVec3::new(10.0, 0.0, 0.0), &m);
         let mut iv = vec![];
         a.reach_intervals(DVec2::new(0.0, -10.0), 14.2, |x, y| iv.push((x, y)));
@@ -321,7 +334,11 @@ mod tests {
         assert!((a.distance(DVec2::new(0.0, 5.0)) - 5.0).abs() < 1e-12);
         // the prepared form agrees with the angle test everywhere, for both directions and
         // sweeps over a half turn
-        for (ccw, to) in [(true, DVec3::new(-10.0, 0.0, 0.0)), (false, DVec3::new(0.0, -10.0, 0.0)), (true, DVec3::new(0.0, -10.0, 0.0))] {
+        for (ccw, to) in [
+            (true, DVec3::new(-10.0, 0.0, 0.0)),
+            (false, DVec3::new(0.0, -10.0, 0.0)),
+            (true, DVec3::new(0.0, -10.0, 0.0)),
+        ] {
             let m = Move { kind: MoveKind::Cut, motion: Motion::Arc { center: DVec2::ZERO, ccw }, to, feed: 1.0 };
             let path = Path::of(DVec3::new(10.0, 0.0, 0.0), &m);
             let Path::Arc(g) = path else { panic!() };

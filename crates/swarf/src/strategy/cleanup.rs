@@ -59,7 +59,13 @@ pub fn passes(g: &LayerGeom, params: &Params, existing: &[Pass]) -> Vec<Pass> {
                     closed.push(ring[0]);
                     for mut p in zone.clip_polyline(&closed) {
                         super::offset::orient_along(&mut p, &closed);
-                        new.push(Pass { pts: p, closed: false, kind: PassKind::Cleanup, level: -(k as f64), reversible: false });
+                        new.push(Pass {
+                            pts: p,
+                            closed: false,
+                            kind: PassKind::Cleanup,
+                            level: -(k as f64),
+                            reversible: false,
+                        });
                     }
                 }
                 k += 1;

@@ -180,7 +180,16 @@ impl LayerGeom {
             touch.intersection(&regions.window.difference(&keep.offset(wall_level, REGION_TOL)))
         };
         let reachable = centres.offset(r, REGION_TOL).intersection(&regions.material).without_slivers(1e-6);
-        Ok(LayerGeom { r, step: job.stepover_mm(), keep, wall_level, touch, centres, reachable, regions: regions.clone() })
+        Ok(LayerGeom {
+            r,
+            step: job.stepover_mm(),
+            keep,
+            wall_level,
+            touch,
+            centres,
+            reachable,
+            regions: regions.clone(),
+        })
     }
 }
 

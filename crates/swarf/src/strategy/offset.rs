@@ -173,7 +173,11 @@ fn order_tree(levels: Vec<Vec<Pass>>, step: f64, inside_out: bool) -> Vec<Pass> 
         cur = if p.closed {
             // the linker starts a loop near the tool and comes back there
             let stride = (p.pts.len() / 64).max(1);
-            *p.pts.iter().step_by(stride).min_by(|a, b| (**a - cur).length().total_cmp(&(**b - cur).length())).unwrap_or(&cur)
+            *p.pts
+                .iter()
+                .step_by(stride)
+                .min_by(|a, b| (**a - cur).length().total_cmp(&(**b - cur).length()))
+                .unwrap_or(&cur)
         } else {
             *p.pts.last().unwrap_or(&cur)
         };
@@ -184,12 +188,26 @@ fn order_tree(levels: Vec<Vec<Pass>>, step: f64, inside_out: bool) -> Vec<Pass> 
 
 /// The passes at one offset level: rings of `keep` grown by `level`, clipped to `touch`,
 /// oriented for climb or conventional milling.
-pub fn level_passes(keep: &Area, level: f64, touch: &Area, params: &Params, toward_walls: bool, kind: PassKind) -> Vec<Pass> {
+pub fn level_passes(
+    keep: &Area,
+    level: f64,
+    touch: &Area,
+    params: &Params,
+    toward_walls: bool,
+    kind: PassKind,
+) -> Vec<Pass> {
     ring_passes(&keep.offset(level, REGION_TOL), level, touch, params, toward_walls, kind)
 }
 
 /// The passes along the rings of `grown` (the walls grown by `level`), clipped to `touch`.
-pub fn ring_passes(grown: &Area, level: f64, touch: &Area, params: &Params, toward_walls: bool, kind: PassKind) -> Vec<Pass> {
+pub fn ring_passes(
+    grown: &Area,
+    level: f64,
+    touch: &Area,
+    params: &Params,
+    toward_walls: bool,
+    kind: PassKind,
+) -> Vec<Pass> {
     let mut out = Vec::new();
     for ring in grown.rings() {
         // rings of the grown walls have the walls on their left; cutting toward the walls
@@ -203,7 +221,8 @@ pub fn ring_passes(grown: &Area, level: f64, touch: &Area, params: &Params, towa
         let mut closed_pts = pts.clone();
         closed_pts.push(pts[0]);
         let pieces = touch.clip_polyline(&closed_pts);
-        let whole = pieces.len() == 1 && (crate::geom::polyline_length(&pieces[0]) - crate::geom::polyline_length(&closed_pts)).abs() < 1e-6;
+        let whole = pieces.len() == 1
+            && (crate::geom::polyline_length(&pieces[0]) - crate::geom::polyline_length(&closed_pts)).abs() < 1e-6;
         if whole {
             out.push(Pass { pts, closed: true, kind, level, reversible: false });
         } else {

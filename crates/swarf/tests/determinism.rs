@@ -1,0 +1,71 @@
+//! The same job gives the same program: `swarf::pipeline::rough` twice on the same input must
+//! write byte-identical G-code and the same report (timings aside), whatever the number of
+//! threads it runs on.
+
+use std::path::Path;
+use swarf::model::Job;
+use swarf::pipeline::{RoughOptions, RoughResult, rough};
+use swarf::report::Report;
+use swarf::strategy::StrategyKind;
+
+fn run(job: &Job, opts: &RoughOptions, threads: usize) -> RoughResult {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
+    pool.install(|| rough(job, opts, &mut |_, _| {})).unwrap_or_else(|e| panic!("{}: {e}", job.name))
+}
+
+/// The report without the fields that measure time.
+fn untimed(r: &Report) -> Report {
+    Report { compute_s: 0.0, simulate_s: 0.0, ..r.clone() }
+}
+
+fn check(job: &Job, opts: &RoughOptions, what: &str) {
+    let a = run(job, opts, 1);
+    let b = run(job, opts, 1);
+    let c = run(job, opts, 4);
+    assert!(a.gcode.lines().count() > 20, "{what}: suspiciously short program:\n{}", a.gcode);
+    assert!(a.report.cut_length_mm > 0.0, "{what}: nothing cut");
+    for (other, how) in [(&b, "a second run"), (&c, "a run on 4 threads")] {
+        if a.gcode != other.gcode {
+            let at = a.gcode.lines().zip(other.gcode.lines()).position(|(x, y)| x != y);
+            panic!(
+                "{what}: {how} wrote different G-code ({} vs {} lines, first difference at line {:?}: {:?} vs {:?})",
+                a.gcode.lines().count(),
+                other.gcode.lines().count(),
+                at.map(|i| i + 1),
+                at.and_then(|i| a.gcode.lines().nth(i)),
+                at.and_then(|i| other.gcode.lines().nth(i)),
+            );
+        }
+        assert_eq!(a.toolpath.moves, other.toolpath.moves, "{what}: {how} gave different moves");
+        assert_eq!(a.toolpath.notes, other.toolpath.notes, "{what}: {how} gave different notes");
+        assert_eq!(untimed(&a.report), untimed(&other.report), "{what}: {how} gave a different report");
+        let (ra, ro) = (a.replay.as_ref().expect("simulated"), other.replay.as_ref().expect("simulated"));
+        assert!(
+            ra.samples == ro.samples,
+            "{what}: {how}: different engagement samples ({} vs {})",
+            ra.samples.len(),
+            ro.samples.len()
+        );
+        assert_eq!(ra.gouges, ro.gouges, "{what}: {how}: gouges");
+        assert_eq!(ra.rapid_collisions, ro.rapid_collisions, "{what}: {how}: rapid collisions");
+        assert_eq!(ra.plunges, ro.plunges, "{what}: {how}: plunges");
+    }
+}
+
+#[test]
+fn builtin_example_is_deterministic() {
+    let job = swarf::pipeline::example_job();
+    let opts = RoughOptions { input_name: "demo".into(), ..Default::default() };
+    check(&job, &opts, "example_job, offset");
+}
+
+#[test]
+fn case_file_is_deterministic() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cases/l_pocket.json");
+    let job = swarf::io::load_job(&path, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
+    for kind in [StrategyKind::Offset, StrategyKind::Zigzag] {
+        let mut opts = RoughOptions { input_name: "l_pocket.json".into(), ..Default::default() };
+        opts.params.strategy = kind;
+        check(&job, &opts, &format!("l_pocket, {}", kind.name()));
+    }
+}

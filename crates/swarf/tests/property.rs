@@ -1,0 +1,590 @@
+//! Property tests: random pockets with islands and random open-sided jobs, roughed with the
+//! `offset` and `zigzag` strategies and checked with swarf's own simulator (the report):
+//! no gouge, no rapid collision, less than 0.5 % of the reachable area left, and no plunge
+//! where the tool has room for a helix.
+//!
+//! The generator is deterministic: every case is made from one seed (a xorshift64* stream seeded
+//! through splitmix64), so a failure reproduces from its seed alone. A failing case is reported
+//! with its seed, its parameters (as `swarf rough` flags), its figures and its case JSON, which
+//! can be saved to a file and run with the CLI.
+
+use std::fmt::Write as _;
+use std::time::Instant;
+use swarf::geom::{DVec2, dist_point_segment, ring_area};
+use swarf::model::Job;
+use swarf::pipeline::{RoughOptions, rough};
+use swarf::sim::SimOptions;
+use swarf::strategy::{LayerGeom, OffsetOrder, Params, StrategyKind};
+
+// ---------------------------------------------------------------------------------------------
+// random numbers
+
+/// xorshift64* seeded by splitmix64.
+struct Rng(u64);
+
+impl Rng {
+    fn new(seed: u64) -> Rng {
+        let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        Rng(z.max(1))
+    }
+    fn next_u64(&mut self) -> u64 {
+        let mut x = self.0;
+        x ^= x >> 12;
+        x ^= x << 25;
+        x ^= x >> 27;
+        self.0 = x;
+        x.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    /// Uniform in [0, 1).
+    fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// Uniform in [a, b).
+    fn range(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * self.unit()
+    }
+    /// Uniform integer in [a, b].
+    fn int(&mut self, a: usize, b: usize) -> usize {
+        a + (self.next_u64() % (b - a + 1) as u64) as usize
+    }
+    fn chance(&mut self, p: f64) -> bool {
+        self.unit() < p
+    }
+}
+
+#[test]
+fn the_generator_is_deterministic() {
+    let a: Vec<u64> = (0..5).map(|_| Rng::new(42).next_u64()).collect();
+    assert!(a.windows(2).all(|w| w[0] == w[1]));
+    let mut r = Rng::new(7);
+    let v: Vec<f64> = (0..1000).map(|_| r.unit()).collect();
+    assert!(v.iter().all(|x| (0.0..1.0).contains(x)));
+    let mean = v.iter().sum::<f64>() / v.len() as f64;
+    assert!((mean - 0.5).abs() < 0.05, "{mean}");
+    let c1 = pocket_case(1234, StrategyKind::Offset);
+    let c2 = pocket_case(1234, StrategyKind::Offset);
+    assert_eq!(c1.json, c2.json);
+    assert_ne!(c1.json, pocket_case(1235, StrategyKind::Offset).json);
+}
+
+// ---------------------------------------------------------------------------------------------
+// shapes
+
+type Ring = Vec<DVec2>;
+
+fn rotate(p: DVec2, a: f64) -> DVec2 {
+    DVec2::new(p.x * a.cos() - p.y * a.sin(), p.x * a.sin() + p.y * a.cos())
+}
+
+/// Counter-clockwise.
+fn ccw(mut r: Ring) -> Ring {
+    if ring_area(&r) < 0.0 {
+        r.reverse();
+    }
+    r
+}
+
+fn rect_ring(c: DVec2, w: f64, h: f64, angle: f64) -> Ring {
+    [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)]
+        .iter()
+        .map(|&(x, y)| c + rotate(DVec2::new(x * w, y * h), angle))
+        .collect()
+}
+
+fn circle_ring(c: DVec2, r: f64) -> Ring {
+    // vertices outside the circle, so the polygon contains it
+    let n = 48;
+    let step = std::f64::consts::TAU / n as f64;
+    let rr = r / (step / 2.0).cos();
+    (0..n).map(|i| c + rr * DVec2::new((i as f64 * step).cos(), (i as f64 * step).sin())).collect()
+}
+
+fn rounded_rect_ring(c: DVec2, w: f64, h: f64, rc: f64, angle: f64) -> Ring {
+    if rc < 0.5 {
+        return rect_ring(c, w, h, angle);
+    }
+    let mut pts = Vec::new();
+    let (hx, hy) = (w / 2.0 - rc, h / 2.0 - rc);
+    let corners = [(hx, hy, 0.0), (-hx, hy, 90.0), (-hx, -hy, 180.0), (hx, -hy, 270.0)];
+    for (x, y, a0) in corners {
+        for k in 0..=8 {
+            let a = (a0 + 90.0 * k as f64 / 8.0f64).to_radians();
+            pts.push(c + rotate(DVec2::new(x + rc * a.cos(), y + rc * a.sin()), angle));
+        }
+    }
+    pts
+}
+
+/// A star-shaped polygon around `c`: `n` vertices at evenly spaced jittered angles, radii in
+/// `[rmin, rmax]` (non-convex in general).
+fn star_ring(rng: &mut Rng, c: DVec2, n: usize, rmin: f64, rmax: f64) -> Ring {
+    let step = std::f64::consts::TAU / n as f64;
+    let a0 = rng.range(0.0, std::f64::consts::TAU);
+    (0..n)
+        .map(|i| {
+            let a = a0 + step * (i as f64 + rng.range(-0.3, 0.3));
+            c + rng.range(rmin, rmax) * DVec2::new(a.cos(), a.sin())
+        })
+        .collect()
+}
+
+/// A convex polygon: points on a circle at sorted random angles.
+fn convex_ring(rng: &mut Rng, c: DVec2, n: usize, r: f64) -> Ring {
+    let mut a: Vec<f64> = (0..n).map(|_| rng.range(0.0, std::f64::consts::TAU)).collect();
+    a.sort_by(f64::total_cmp);
+    // keep the gaps below a half turn so the polygon surrounds its centre
+    let ok = a.windows(2).all(|w| w[1] - w[0] < 0.9 * std::f64::consts::PI)
+        && a[0] + std::f64::consts::TAU - a[n - 1] < 0.9 * std::f64::consts::PI;
+    if !ok {
+        a = (0..n).map(|i| std::f64::consts::TAU * i as f64 / n as f64 + rng.range(0.0, 0.5)).collect();
+    }
+    a.iter().map(|t| c + r * DVec2::new(t.cos(), t.sin())).collect()
+}
+
+/// An L-shaped (notched) rectangle centred at `c`.
+fn notched_ring(rng: &mut Rng, c: DVec2, w: f64, h: f64, angle: f64) -> Ring {
+    let nw = w * rng.range(0.3, 0.5);
+    let nh = h * rng.range(0.3, 0.5);
+    let (x0, y0, x1, y1) = (-w / 2.0, -h / 2.0, w / 2.0, h / 2.0);
+    [(x0, y0), (x1, y0), (x1, y1 - nh), (x1 - nw, y1 - nh), (x1 - nw, y1), (x0, y1)]
+        .iter()
+        .map(|&(x, y)| c + rotate(DVec2::new(x, y), angle))
+        .collect()
+}
+
+fn inside(ring: &[DVec2], q: DVec2) -> bool {
+    let mut c = false;
+    let n = ring.len();
+    let mut j = n - 1;
+    for i in 0..n {
+        let (a, b) = (ring[i], ring[j]);
+        if (a.y > q.y) != (b.y > q.y) && q.x < a.x + (q.y - a.y) / (b.y - a.y) * (b.x - a.x) {
+            c = !c;
+        }
+        j = i;
+    }
+    c
+}
+
+fn boundary_distance(ring: &[DVec2], q: DVec2) -> f64 {
+    (0..ring.len()).map(|i| dist_point_segment(q, ring[i], ring[(i + 1) % ring.len()])).fold(f64::INFINITY, f64::min)
+}
+
+fn bounds(ring: &[DVec2]) -> (DVec2, DVec2) {
+    ring.iter()
+        .fold((DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
+}
+
+// ---------------------------------------------------------------------------------------------
+// cases
+
+/// One generated job with its roughing parameters.
+struct Case {
+    seed: u64,
+    what: String,
+    json: String,
+    job: Job,
+    params: Params,
+    res: f64,
+}
+
+fn json_ring(r: &[DVec2]) -> String {
+    let pts: Vec<String> = r.iter().map(|p| format!("[{:.6},{:.6}]", p.x, p.y)).collect();
+    format!("[{}]", pts.join(","))
+}
+
+fn json_poly(outer: &[DVec2], holes: &[Ring]) -> String {
+    let hs: Vec<String> = holes.iter().map(|h| json_ring(h)).collect();
+    format!("{{\"outer\":{},\"holes\":[{}]}}", json_ring(outer), hs.join(","))
+}
+
+/// Tool, width, depths and allowance common to both kinds of case, as JSON members.
+fn common(rng: &mut Rng, d: f64) -> String {
+    let mut s = String::new();
+    write!(s, "\"units\":\"mm\",\"tool\":{{\"diameter\":{d:.3},\"type\":\"flat\"}},\"stock_top\":0.0,\"part_top\":0.0")
+        .unwrap();
+    let depth = rng.range(3.0, 10.0);
+    write!(s, ",\"floor\":{:.3}", -depth).unwrap();
+    if rng.chance(0.5) {
+        write!(s, ",\"stepdown\":{:.3}", 0.6 * depth).unwrap();
+    }
+    if rng.chance(0.5) {
+        write!(s, ",\"stepover\":{:.3}", rng.range(0.1, 0.6)).unwrap();
+    } else {
+        // the engagement of a straight cut at 10 % to 60 % stepover
+        write!(s, ",\"engagement_deg\":{:.2}", rng.range(37.0, 101.0)).unwrap();
+    }
+    if rng.chance(0.2) {
+        write!(s, ",\"allowance\":{:.3}", rng.range(0.1, 0.5)).unwrap();
+    }
+    write!(s, ",\"feed_default\":1000,\"rapid_rate\":5000").unwrap();
+    s
+}
+
+fn params(rng: &mut Rng, strategy: StrategyKind) -> Params {
+    Params {
+        strategy,
+        climb: rng.chance(0.5),
+        offset_order: if rng.chance(0.5) { OffsetOrder::InsideOut } else { OffsetOrder::OutsideIn },
+        zigzag_angle_deg: if rng.chance(0.5) { 0.0 } else { rng.range(0.0, 180.0).round() },
+        ..Params::default()
+    }
+}
+
+/// The simulation cell size: the default (D / 100 within [0.02, 0.1]) for the report's
+/// figures, but not finer than 0.05 mm so that the whole file stays within its time budget.
+fn res_for(d: f64) -> f64 {
+    (SimOptions::default().res_for(d).max(0.05) * 1000.0).round() / 1000.0
+}
+
+fn finish(seed: u64, what: String, json: String, params: Params, d: f64) -> Case {
+    let job = swarf::io::case::parse_case(std::path::Path::new(&format!("prop_{seed}.json")), json.as_bytes())
+        .unwrap_or_else(|e| panic!("seed {seed}: the generated case does not parse: {e}\n{json}"));
+    Case { seed, what, json, job, params, res: res_for(d) }
+}
+
+/// A closed pocket 40–120 mm (rounded rectangle, notched rectangle or star polygon) with 0–3
+/// islands (circles, rectangles, convex polygons) that keep 1.5·D + 2 mm from the walls and from
+/// each other, so that the tool passes everywhere with room for a helix.
+fn pocket_case(seed: u64, strategy: StrategyKind) -> Case {
+    let mut rng = Rng::new(seed);
+    let d = (rng.range(3.0, 12.0) * 1000.0).round() / 1000.0;
+    let angle = if rng.chance(0.5) { 0.0 } else { rng.range(0.0, std::f64::consts::FRAC_PI_2) };
+    let (shape, pocket) = match rng.int(0, 2) {
+        0 => {
+            let (w, h) = (rng.range(40.0, 120.0), rng.range(40.0, 120.0));
+            let rc = if rng.chance(0.3) { 0.0 } else { rng.range(0.0, 0.25 * w.min(h)) };
+            (format!("rounded rectangle {w:.1}x{h:.1} r {rc:.1}"), rounded_rect_ring(DVec2::ZERO, w, h, rc, angle))
+        }
+        1 => {
+            let (w, h) = (rng.range(50.0, 120.0), rng.range(50.0, 120.0));
+            (format!("notched rectangle {w:.1}x{h:.1}"), notched_ring(&mut rng, DVec2::ZERO, w, h, angle))
+        }
+        _ => {
+            let rmax = rng.range(20.0, 60.0);
+            let n = rng.int(5, 10);
+            (format!("star polygon n {n} r {rmax:.1}"), star_ring(&mut rng, DVec2::ZERO, n, 0.65 * rmax, rmax))
+        }
+    };
+    let pocket = ccw(pocket);
+    let gap = 1.5 * d + 2.0;
+    let want = rng.int(0, 3);
+    let (lo, hi) = bounds(&pocket);
+    let mut islands: Vec<(DVec2, f64, Ring, &str)> = Vec::new();
+    for _ in 0..want {
+        for _try in 0..60 {
+            let c = DVec2::new(rng.range(lo.x, hi.x), rng.range(lo.y, hi.y));
+            let (ring, rad, kind) = match rng.int(0, 2) {
+                0 => {
+                    let r = rng.range(3.0, 12.0);
+                    (circle_ring(c, r), r / (std::f64::consts::PI / 48.0).cos(), "circle")
+                }
+                1 => {
+                    let (w, h) = (rng.range(5.0, 25.0), rng.range(5.0, 25.0));
+                    (
+                        rect_ring(c, w, h, rng.range(0.0, std::f64::consts::PI)),
+                        0.5 * (w * w + h * h).sqrt(),
+                        "rectangle",
+                    )
+                }
+                _ => {
+                    let r = rng.range(4.0, 12.0);
+                    let n = rng.int(3, 7);
+                    (convex_ring(&mut rng, c, n, r), r, "convex polygon")
+                }
+            };
+            if !inside(&pocket, c) || boundary_distance(&pocket, c) < rad + gap {
+                continue;
+            }
+            if islands.iter().any(|(c2, r2, _, _)| (c - *c2).length() < rad + r2 + gap) {
+                continue;
+            }
+            islands.push((c, rad, ccw(ring), kind));
+            break;
+        }
+    }
+    let frame = rect_ring(0.5 * (lo + hi), hi.x - lo.x + 20.0, hi.y - lo.y + 20.0, 0.0);
+    let mut parts = vec![json_poly(&ccw(frame), &[pocket.iter().rev().copied().collect()])];
+    parts.extend(islands.iter().map(|(_, _, r, _)| json_poly(r, &[])));
+    let json = format!("{{{},\"stock\":{},\"part\":[{}]}}", common(&mut rng, d), json_ring(&pocket), parts.join(","));
+    let kinds: Vec<&str> = islands.iter().map(|i| i.3).collect();
+    let what = format!("pocket: {shape}, islands {kinds:?}, tool Ø{d:.3}");
+    let p = params(&mut rng, strategy);
+    finish(seed, what, json, p, d)
+}
+
+/// An open-sided job: a rectangular stock 50–100 mm with a random part (star polygon or
+/// rectangle) inside it or across one of its edges, sometimes a clamp at a corner.
+fn open_case(seed: u64, strategy: StrategyKind) -> Case {
+    let mut rng = Rng::new(seed ^ 0x5EED_0F0E_u64);
+    let d = (rng.range(3.0, 12.0) * 1000.0).round() / 1000.0;
+    let (w, h) = (rng.range(50.0, 100.0), rng.range(40.0, 90.0));
+    let stock = rect_ring(DVec2::ZERO, w, h, 0.0);
+    let rmax = rng.range(8.0, 0.4 * w.min(h));
+    let at_edge = rng.chance(0.5);
+    let c = if at_edge {
+        match rng.int(0, 3) {
+            0 => DVec2::new(rng.range(-0.3, 0.3) * w, -h / 2.0),
+            1 => DVec2::new(rng.range(-0.3, 0.3) * w, h / 2.0),
+            2 => DVec2::new(-w / 2.0, rng.range(-0.3, 0.3) * h),
+            _ => DVec2::new(w / 2.0, rng.range(-0.3, 0.3) * h),
+        }
+    } else {
+        let m = DVec2::new(w / 2.0 - rmax, h / 2.0 - rmax).max(DVec2::ZERO);
+        DVec2::new(rng.range(-m.x, m.x + 1e-9), rng.range(-m.y, m.y + 1e-9))
+    };
+    let (shape, part) = if rng.chance(0.6) {
+        let n = rng.int(5, 10);
+        ("star polygon", star_ring(&mut rng, c, n, 0.6 * rmax, rmax))
+    } else {
+        ("rectangle", rect_ring(c, 1.6 * rmax, rng.range(0.6, 1.6) * rmax, rng.range(0.0, std::f64::consts::PI)))
+    };
+    let part = ccw(part);
+    let mut fixtures = String::new();
+    if rng.chance(0.3) {
+        // a clamp over a stock corner, kept clear of the part
+        let sx = if rng.chance(0.5) { -1.0 } else { 1.0 };
+        let sy = if rng.chance(0.5) { -1.0 } else { 1.0 };
+        let corner = DVec2::new(sx * w / 2.0, sy * h / 2.0);
+        let (cw, ch) = (rng.range(8.0, 15.0), rng.range(6.0, 12.0));
+        let fc = corner - DVec2::new(sx * (cw / 2.0 - 3.0), sy * (ch / 2.0 - 3.0));
+        let clamp = rect_ring(fc, cw, ch, 0.0);
+        let far = part.iter().map(|p| boundary_distance(&clamp, *p)).fold(f64::INFINITY, f64::min);
+        if !clamp.iter().any(|q| inside(&part, *q)) && !part.iter().any(|q| inside(&clamp, *q)) && far > 1.5 * d + 2.0 {
+            fixtures = format!(",\"fixtures\":[{}]", json_poly(&ccw(clamp), &[]));
+        }
+    }
+    let json = format!(
+        "{{{},\"stock\":{},\"part\":[{}]{fixtures}}}",
+        common(&mut rng, d),
+        json_ring(&stock),
+        json_poly(&part, &[])
+    );
+    let what = format!(
+        "open: stock {w:.1}x{h:.1}, {shape} r {rmax:.1} {}{}, tool Ø{d:.3}",
+        if at_edge { "across an edge" } else { "inside" },
+        if fixtures.is_empty() { "" } else { ", clamp" }
+    );
+    let p = params(&mut rng, strategy);
+    finish(seed, what, json, p, d)
+}
+
+// ---------------------------------------------------------------------------------------------
+// checks
+
+/// Does every region the tool centre must reach have room for a helix of the smallest radius
+/// the linker accepts (`helix_min_frac · R` plus its margins)?
+fn room_for_helix(case: &Case) -> bool {
+    let job = &case.job;
+    let Ok(regions) = job.regions(job.radius(), swarf::strategy::wall_margin(&case.params)) else { return false };
+    let Ok(geom) = LayerGeom::new(job, &regions, &case.params) else { return false };
+    let need = case.params.helix_min_frac * job.radius() + case.params.arc_tol + 0.01;
+    geom.centres.components().iter().all(|c| !c.offset(-need, 1e-3).is_empty())
+}
+
+fn flags(p: &Params, res: f64) -> String {
+    let mut s = format!("--strategy {}", p.strategy.name());
+    if !p.climb {
+        s.push_str(" --conventional");
+    }
+    if p.strategy == StrategyKind::Offset {
+        s.push_str(match p.offset_order {
+            OffsetOrder::InsideOut => " --order inside-out",
+            OffsetOrder::OutsideIn => " --order outside-in",
+        });
+    } else {
+        write!(s, " --angle {}", p.zigzag_angle_deg).unwrap();
+    }
+    write!(s, " --res {res}").unwrap();
+    s
+}
+
+/// Roughs one case and returns its problems (empty when it passes) and a one-line summary.
+fn run(case: &Case) -> (Vec<String>, String) {
+    let opts = RoughOptions {
+        params: case.params.clone(),
+        // engagement samples every 0.5 mm: the figures checked here (gouges, collisions, rest,
+        // plunges) do not depend on them, and the default (res / 2) triples the time
+        sim: SimOptions { res: Some(case.res), sample_step: Some(0.5), ..Default::default() },
+        simulate: true,
+        input_name: format!("prop_{}", case.seed),
+        ..Default::default()
+    };
+    let t = Instant::now();
+    let mut problems = Vec::new();
+    let out = match rough(&case.job, &opts, &mut |_, _| {}) {
+        Ok(o) => o,
+        Err(e) => return (vec![format!("rough() failed: {e}")], String::new()),
+    };
+    let r = &out.report;
+    if r.gouges != 0 {
+        problems.push(format!("{} gouges (deepest {:.4} mm)", r.gouges, r.gouge_max_mm));
+    }
+    if r.rapid_collisions != 0 {
+        problems.push(format!("{} rapid collisions", r.rapid_collisions));
+    }
+    // NaN fails too
+    if r.rest_fraction.is_nan() || r.rest_fraction >= 0.005 {
+        problems.push(format!(
+            "rest_fraction {:.5} (rest {:.2} mm² of {:.1} mm² reachable, {:.2} mm³)",
+            r.rest_fraction, r.rest_area_mm2, r.reachable_area_mm2, r.rest_volume_mm3
+        ));
+    }
+    let room = room_for_helix(case);
+    if room && r.plunges != 0 {
+        problems.push(format!("{} plunges although the pocket has room for a helix", r.plunges));
+    }
+    if !problems.is_empty()
+        && let Some(rp) = &out.replay
+    {
+        for g in rp.gouges.iter().take(3) {
+            problems.push(format!("  gouge at move {} {:?} depth {:.4}", g.move_index, g.at, g.depth));
+        }
+        for g in rp.rapid_collisions.iter().take(3) {
+            problems.push(format!("  rapid collision at move {} {:?} depth {:.4}", g.move_index, g.at, g.depth));
+        }
+        for g in rp.plunges.iter().take(3) {
+            problems.push(format!("  plunge at move {} {:?}", g.move_index, g.at));
+        }
+    }
+    let summary = format!(
+        "seed {:>5} {:7} {:.1}s (plan {:.1}s, sim {:.1}s): {} | {} | moves {} rest {:.5} plunges {} entries {} TEA ref {:.0}° p99 {:.0}° max {:.0}°{}",
+        case.seed,
+        case.params.strategy.name(),
+        t.elapsed().as_secs_f64(),
+        r.compute_s,
+        r.simulate_s,
+        case.what,
+        flags(&case.params, case.res),
+        r.moves.total,
+        r.rest_fraction,
+        r.plunges,
+        r.entries,
+        r.engagement_ref_deg,
+        r.engagement_deg.p99,
+        r.engagement_deg.max,
+        if room { "" } else { " (no room for a helix)" }
+    );
+    (problems, summary)
+}
+
+/// Runs the cases of `seeds` and fails with every failing case described in full.
+///
+/// `PROP_SEEDS=2001,2002` runs only those seeds (of the groups that hold them).
+fn run_all(name: &str, seeds: std::ops::Range<u64>, make: fn(u64, StrategyKind) -> Case, strategy: StrategyKind) {
+    let only: Option<Vec<u64>> =
+        std::env::var("PROP_SEEDS").ok().map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect());
+    let t = Instant::now();
+    let mut failures = Vec::new();
+    let mut n = 0;
+    for seed in seeds.filter(|s| only.as_ref().is_none_or(|o| o.contains(s))) {
+        let case = make(seed, strategy);
+        let (problems, summary) = run(&case);
+        eprintln!("{name}: {summary}");
+        n += 1;
+        if !problems.is_empty() {
+            failures.push(format!(
+                "seed {} ({}), flags {}:\n  {}\n  reproduce: PROP_SEEDS={} cargo test -p swarf --test property\n  case JSON: {}",
+                case.seed,
+                case.what,
+                flags(&case.params, case.res),
+                problems.join("\n  "),
+                case.seed,
+                case.json
+            ));
+        }
+    }
+    eprintln!("{name}: {n} jobs in {:.1} s, {} failed", t.elapsed().as_secs_f64(), failures.len());
+    assert!(n > 0 || only.is_some(), "no jobs ran");
+    assert!(failures.is_empty(), "{name}: {} of {n} jobs failed:\n{}", failures.len(), failures.join("\n\n"));
+}
+
+// Seeds are fixed per case: closed pockets 1000.. (offset) and 2000.. (zigzag), open jobs
+// 5000.. (offset) and 6000.. (zigzag). 90 jobs in all.
+
+#[test]
+fn random_pockets_offset() {
+    run_all("pockets/offset", 1000..1024, pocket_case, StrategyKind::Offset);
+}
+
+#[test]
+fn random_pockets_zigzag() {
+    run_all("pockets/zigzag", 2000..2036, pocket_case, StrategyKind::Zigzag);
+}
+
+#[test]
+fn random_open_jobs_offset() {
+    run_all("open/offset", 5000..5012, open_case, StrategyKind::Offset);
+}
+
+#[test]
+fn random_open_jobs_zigzag() {
+    run_all("open/zigzag", 6000..6018, open_case, StrategyKind::Zigzag);
+}
+
+/// The checks above are not vacuous: on a generated pocket, the same simulator finds rest
+/// material when half the program is missing, a gouge when a move enters an island, a rapid
+/// collision when a G0 crosses uncut material, and a plunge when the tool goes straight down
+/// into it.
+#[test]
+fn the_checks_can_fail() {
+    use swarf::geom::DVec3;
+    use swarf::sim::RasterSim;
+    use swarf::toolpath::MoveKind;
+    // seed 1000: a pocket with islands
+    let case = pocket_case(1000, StrategyKind::Offset);
+    let job = &case.job;
+    let opts = RoughOptions {
+        params: case.params.clone(),
+        sim: SimOptions { res: Some(case.res), sample_step: Some(0.5), ..Default::default() },
+        ..Default::default()
+    };
+    let out = rough(job, &opts, &mut |_, _| {}).expect("rough");
+    assert!(
+        out.report.rest_fraction < 0.005
+            && out.report.gouges == 0
+            && out.report.rapid_collisions == 0
+            && out.report.plunges == 0
+    );
+    let regions = job.regions(job.radius(), swarf::strategy::wall_margin(&case.params)).expect("regions");
+    let sim0 = RasterSim::new(job, &regions, &opts.sim).expect("simulator");
+    let z = *job.levels().last().unwrap();
+    let safe = out.toolpath.clearance_z;
+    // half the program: rest
+    let mut half = out.toolpath.clone();
+    half.moves.truncate(half.moves.len() / 2);
+    let mut sim = sim0.clone();
+    sim.replay(&half, &mut |_| {});
+    let rest = sim.rest();
+    assert!(
+        rest.area_mm2 / rest.reachable_mm2 > 0.005,
+        "half a program leaves {:.4} of the area",
+        rest.area_mm2 / rest.reachable_mm2
+    );
+    // a move into an island (or the wall): a gouge
+    let (lo, hi) = job.part.bounds().unwrap();
+    let island_or_wall = DVec2::new(0.5 * (lo.x + hi.x), lo.y + 2.0);
+    assert!(job.part.contains(island_or_wall));
+    let mut bad = out.toolpath.clone();
+    bad.line(MoveKind::Cut, island_or_wall.extend(z), 1000.0);
+    let mut sim = sim0.clone();
+    let rp = sim.replay(&bad, &mut |_| {});
+    assert!(!rp.gouges.is_empty(), "a cut into the part is not a gouge");
+    // before anything is cut: a rapid at depth across the pocket, and a plunge
+    let (slo, shi) = job.stock.bounds().unwrap();
+    let grown = job.part.offset(job.radius() + 1.0, 0.01);
+    let inside = (1..20)
+        .flat_map(|i| (1..20).map(move |j| slo + (shi - slo) * DVec2::new(i as f64, j as f64) / 20.0))
+        .find(|p| regions.material.contains(*p) && !grown.contains(*p))
+        .expect("a point in the material");
+    let mut tp = swarf::toolpath::Toolpath::new(job.tool.clone(), inside.extend(safe), safe);
+    tp.line(MoveKind::Plunge, inside.extend(z), 300.0);
+    tp.rapid(DVec3::new(inside.x + 1.0, inside.y, z));
+    let mut sim = sim0.clone();
+    let rp = sim.replay(&tp, &mut |_| {});
+    assert_eq!(rp.plunges.len(), 1, "a plunge into fresh material");
+    assert!(!rp.rapid_collisions.is_empty(), "a rapid through uncut material");
+}
