@@ -23,7 +23,9 @@ const EXPECTED: &[(&str, Result<usize, &str>)] = &[
 #[test]
 #[ignore = "needs the development sample files; prints a report"]
 fn load_shared_dxf_files() {
-    let dir = std::env::var_os("SWARF_PARTS_DXF").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/parts/dxf")));
+    let dir = std::env::var_os("SWARF_PARTS_DXF")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/parts/dxf")));
     if !dir.is_dir() {
         eprintln!("{} is missing: nothing to check", dir.display());
         return;

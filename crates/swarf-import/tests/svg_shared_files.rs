@@ -10,7 +10,9 @@ use swarf_import::{ImportOptions, read_drawing};
 #[test]
 #[ignore = "needs the development sample files; prints a report"]
 fn load_shared_svg_files() {
-    let dir = std::env::var_os("SWARF_PARTS_SVG").map(PathBuf::from).unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/parts/svg")));
+    let dir = std::env::var_os("SWARF_PARTS_SVG")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/parts/svg")));
     let Ok(entries) = std::fs::read_dir(&dir) else {
         eprintln!("{} is missing: nothing to check", dir.display());
         return;

@@ -98,6 +98,49 @@ pub struct Rest {
     pub reachable_mm2: f64,
 }
 
+/// Visits the cells within `rho` of the path whose value in `h` stands more than `above` over
+/// the lowest tool-tip height while the axis is within `rho` of the cell centre:
+/// `f(index, centre, tip_z)`; stops early when `f` returns false. Flat paths (the common case)
+/// need no interval analysis: their tip height is known, so the distance test is done only for
+/// cells high enough to matter.
+fn visit_above(
+    grid: &Grid,
+    h: &[f32],
+    path: &Path,
+    rho: f64,
+    above: f64,
+    mut f: impl FnMut(usize, DVec2, f64) -> bool,
+) {
+    let (lo, hi) = path.bbox(rho);
+    let Some((i0, i1, j0, j1)) = grid.range(lo, hi) else { return };
+    let flat = path.is_flat().then(|| (Fast::new(path), path.z_range().0));
+    for j in j0..=j1 {
+        for i in i0..=i1 {
+            let k = j * grid.nx + i;
+            let v = h[k];
+            if v == f32::NEG_INFINITY {
+                continue;
+            }
+            let q = grid.center(i, j);
+            let z = match &flat {
+                Some((fast, z)) => {
+                    if (v as f64) - *z <= above || fast.distance(q) > rho {
+                        continue;
+                    }
+                    *z
+                }
+                None => match path.reach_zmin(q, rho) {
+                    Some(z) if (v as f64) - z > above => z,
+                    _ => continue,
+                },
+            };
+            if !f(k, q, z) {
+                return;
+            }
+        }
+    }
+}
+
 /// The raster simulator.
 #[derive(Debug, Clone)]
 pub struct RasterSim {
@@ -257,31 +300,12 @@ impl RasterSim {
     /// True when no material stands more than `eps` above the tip anywhere the tool passes
     /// along `path` (checked with the full radius plus `margin`).
     pub fn is_clear(&self, path: &Path, margin: f64) -> bool {
-        let (lo, hi) = path.bbox(self.r + margin);
-        let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) else { return true };
-        let eps = self.eps as f32;
-        let flat = path.is_flat().then(|| (Fast::new(path), (path.z_range().0 as f32) + eps));
-        let rho = self.r + margin;
-        for j in j0..=j1 {
-            for i in i0..=i1 {
-                let k = j * self.grid.nx + i;
-                let h = self.s[k];
-                if h == f32::NEG_INFINITY {
-                    continue;
-                }
-                let q = self.grid.center(i, j);
-                if let Some((f, zq)) = &flat {
-                    if h > *zq && f.distance(q) <= rho {
-                        return false;
-                    }
-                } else if let Some(z) = path.reach_zmin(q, rho)
-                    && h > z as f32 + eps
-                {
-                    return false;
-                }
-            }
-        }
-        true
+        let mut clear = true;
+        visit_above(&self.grid, &self.s, path, self.r + margin, self.eps, |_, _, _| {
+            clear = false;
+            false
+        });
+        clear
     }
 
     /// Exact distance from the XY path to the part/fixture boundary (capped at `max`), or 0
@@ -397,35 +421,16 @@ impl RasterSim {
     /// test against the part polygons.
     fn gouge_depth(&self, path: &Path) -> (f64, DVec3) {
         let rr = self.r - self.tol;
-        let (lo, hi) = path.bbox(rr);
         let mut worst = 0.0f64;
         let mut at = path.at(0.0);
-        if let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) {
-            let flat = path.is_flat().then(|| (Fast::new(path), path.z_range().0));
-            for j in j0..=j1 {
-                for i in i0..=i1 {
-                    let pz = self.p[j * self.grid.nx + i] as f64;
-                    let q = self.grid.center(i, j);
-                    let z = match &flat {
-                        Some((f, z)) => {
-                            if pz - *z <= self.tol.max(worst) || f.distance(q) > rr {
-                                continue;
-                            }
-                            *z
-                        }
-                        None => match path.reach_zmin(q, rr) {
-                            Some(z) => z,
-                            None => continue,
-                        },
-                    };
-                    let d = pz - z;
-                    if d > self.tol && d > worst {
-                        worst = d;
-                        at = DVec3::new(q.x, q.y, z);
-                    }
-                }
+        visit_above(&self.grid, &self.p, path, rr, self.tol, |k, q, z| {
+            let d = self.p[k] as f64 - z;
+            if d > worst {
+                worst = d;
+                at = DVec3::new(q.x, q.y, z);
             }
-        }
+            true
+        });
         // exact radial test where the tip is below the part top
         let (z0, z1) = path.z_range();
         let zlim = self.part_top_eff - self.tol;
@@ -493,39 +498,16 @@ impl RasterSim {
             }
             if m.is_rapid() {
                 // a rapid must not touch uncut material
-                let rr = self.r - self.tol;
-                let (lo, hi) = path.bbox(rr);
                 let mut worst = 0.0f64;
                 let mut at = m.to;
-                if let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) {
-                    let flat = path.is_flat().then(|| (Fast::new(&path), path.z_range().0));
-                    for j in j0..=j1 {
-                        for i in i0..=i1 {
-                            let k = j * self.grid.nx + i;
-                            if self.s[k] == f32::NEG_INFINITY {
-                                continue;
-                            }
-                            let q = self.grid.center(i, j);
-                            let zr = match &flat {
-                                Some((f, z)) => {
-                                    if (self.s[k] as f64) - *z <= self.eps || f.distance(q) > rr {
-                                        None
-                                    } else {
-                                        Some(*z)
-                                    }
-                                }
-                                None => path.reach_zmin(q, rr),
-                            };
-                            if let Some(z) = zr {
-                                let d = self.s[k] as f64 - z;
-                                if d > self.eps && d > worst {
-                                    worst = d;
-                                    at = DVec3::new(q.x, q.y, z);
-                                }
-                            }
-                        }
+                visit_above(&self.grid, &self.s, &path, self.r - self.tol, self.eps, |k, q, z| {
+                    let d = self.s[k] as f64 - z;
+                    if d > worst {
+                        worst = d;
+                        at = DVec3::new(q.x, q.y, z);
                     }
-                }
+                    true
+                });
                 if worst > 0.0 {
                     out.rapid_collisions.push(Event { move_index: mi, at: at.to_array(), depth: worst });
                 }
