@@ -36,6 +36,7 @@ enum Cmd {
 
 #[derive(Copy, Clone, PartialEq, Eq, ValueEnum)]
 enum StrategyArg {
+    Adaptive,
     Offset,
     Zigzag,
 }
@@ -231,6 +232,7 @@ fn overrides(o: &CommonOpts) -> Overrides {
 fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> {
     let params = Params {
         strategy: match o.strategy {
+            StrategyArg::Adaptive => StrategyKind::Adaptive,
             StrategyArg::Offset => StrategyKind::Offset,
             StrategyArg::Zigzag => StrategyKind::Zigzag,
         },

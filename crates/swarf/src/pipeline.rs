@@ -100,7 +100,7 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
     if debug {
         eprintln!("passes {:.3} s ({} passes)", t0.elapsed().as_secs_f64(), passes.len());
     }
-    if passes.is_empty() {
+    if passes.is_empty() && opts.params.strategy != strategy::StrategyKind::Adaptive {
         return Err(Error::param("strategy", "the strategy found nothing to cut"));
     }
     let zs = job.levels();
@@ -112,7 +112,11 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
         Vec::new()
     };
     progress(Stage::Plan, 0.5);
-    let mut toolpath = plan::link(job, &regions, &opts.params, &levels, &finish, &opts.sim)?;
+    let mut toolpath = if opts.params.strategy == strategy::StrategyKind::Adaptive {
+        plan::adaptive::link_adaptive(job, &regions, &opts.params, &zs, &finish, &opts.sim)?
+    } else {
+        plan::link(job, &regions, &opts.params, &levels, &finish, &opts.sim)?
+    };
     toolpath.quantize(post::COORD_STEP, post::CENTER_STEP);
     let compute_s = t0.elapsed().as_secs_f64();
     progress(Stage::Plan, 1.0);

@@ -16,6 +16,7 @@
 //! every cell, the interval of the move during which the axis is within `R` of the cell centre
 //! ([`sweep`]) gives the lowest tip height over it.
 
+pub mod edt;
 pub mod exact;
 pub mod grid;
 pub mod raster;

@@ -165,6 +165,9 @@ pub struct RasterSim {
     floor_eff: f64,
     /// Record cuts for exact engagement (off for planning-only models).
     pub track_exact: bool,
+    /// Level whose reachable material is counted in `reach_left` (see [`Self::begin_level`]).
+    level_thr: f32,
+    reach_left: usize,
 }
 
 impl RasterSim {
@@ -263,6 +266,8 @@ impl RasterSim {
             part_top_eff,
             floor_eff,
             track_exact: true,
+            level_thr: f32::INFINITY,
+            reach_left: 0,
         })
     }
 
@@ -346,22 +351,185 @@ impl RasterSim {
                         continue;
                     }
                     let q = self.grid.center(i, j);
-                    if let Some((f, z)) = &flat {
-                        if *z < h && f.distance(q) <= r {
-                            self.s[k] = *z;
-                        }
+                    let z = if let Some((f, z)) = &flat {
+                        if *z < h && f.distance(q) <= r { *z } else { continue }
                     } else if let Some(z) = path.reach_zmin(q, r) {
                         let z = z as f32;
-                        if z < h {
-                            self.s[k] = z;
-                        }
-                    }
+                        if z < h { z } else { continue }
+                    } else {
+                        continue;
+                    };
+                    self.lower(k, z);
                 }
             }
         }
         if self.track_exact {
             self.exact.add(path);
         }
+    }
+
+    /// Lowers cell `k` to `z`, keeping the count of reachable material of the level.
+    #[inline]
+    fn lower(&mut self, k: usize, z: f32) {
+        let h = self.s[k];
+        if z < h {
+            if h > self.level_thr && z <= self.level_thr && self.reach[k] {
+                self.reach_left -= 1;
+            }
+            self.s[k] = z;
+        }
+    }
+
+    /// Starts counting the reachable material that stands above `z` (plus `eps`): the cells the
+    /// tool can reach at this level and must still clear.
+    pub fn begin_level(&mut self, z: f64) {
+        self.level_thr = (z + self.eps) as f32;
+        let thr = self.level_thr;
+        self.reach_left = self.s.iter().zip(&self.reach).filter(|(h, r)| **r && **h > thr).count();
+    }
+
+    /// Reachable cells still standing above the level given to [`Self::begin_level`].
+    pub fn reach_left(&self) -> usize {
+        self.reach_left
+    }
+
+    /// Cell size, mm.
+    pub fn res(&self) -> f64 {
+        self.grid.res
+    }
+
+    /// Cuts a horizontal step from `a` to `b` at height `z` — the inner loop of adaptive
+    /// clearing. Only the new part of the sweep is visited: on each grid row, the cells of the
+    /// tool disk at `b` and of the stadium's sides, minus those of the disk at `a` that the
+    /// previous step already cut.
+    pub fn cut_step(&mut self, a: DVec2, b: DVec2, z: f64) {
+        let r = self.r;
+        let res = self.grid.res;
+        let zf = z as f32;
+        let lo_y = a.y.min(b.y) - r;
+        let hi_y = a.y.max(b.y) + r;
+        let (nx, ny) = (self.grid.nx as i64, self.grid.ny as i64);
+        let j0 = (((lo_y - self.grid.y0) / res) - 0.5).ceil().max(0.0) as i64;
+        let j1 = (((hi_y - self.grid.y0) / res) - 0.5).floor().min(ny as f64 - 1.0) as i64;
+        let ab = b - a;
+        let l2 = ab.length_squared();
+        let inv = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
+        for j in j0..=j1 {
+            let y = self.grid.y0 + (j as f64 + 0.5) * res;
+            // x-range of the stadium on this row: the union of the two disks' spans and the
+            // band between them, found from the segment distance at the row's extremes
+            let span = |c: DVec2| {
+                let dy = y - c.y;
+                let w2 = r * r - dy * dy;
+                if w2 >= 0.0 { Some((c.x - w2.sqrt(), c.x + w2.sqrt())) } else { None }
+            };
+            let (sa, sb) = (span(a), span(b));
+            let mut xlo = f64::INFINITY;
+            let mut xhi = f64::NEG_INFINITY;
+            for s in [sa, sb].into_iter().flatten() {
+                xlo = xlo.min(s.0);
+                xhi = xhi.max(s.1);
+            }
+            // the band of the stadium between the disks
+            if ab.y.abs() > 1e-12 || ab.x.abs() > 1e-12 {
+                let n = DVec2::new(-ab.y, ab.x).normalize();
+                for sgn in [-1.0, 1.0] {
+                    let off = n * (r * sgn);
+                    let (p, q) = (a + off, b + off);
+                    if (p.y - y) * (q.y - y) <= 0.0 && (q.y - p.y).abs() > 1e-12 {
+                        let x = p.x + (y - p.y) / (q.y - p.y) * (q.x - p.x);
+                        xlo = xlo.min(x);
+                        xhi = xhi.max(x);
+                    }
+                }
+            }
+            if xlo > xhi {
+                continue;
+            }
+            let i0 = (((xlo - self.grid.x0) / res) - 0.5).ceil().max(0.0) as i64;
+            let i1 = (((xhi - self.grid.x0) / res) - 0.5).floor().min(nx as f64 - 1.0) as i64;
+            // cells inside the disk at `a` were cut by the previous step (or are about to be
+            // skipped by the height test below anyway)
+            let inner = sa.map(|(l, h)| {
+                let l = (((l - self.grid.x0) / res) - 0.5).ceil() as i64 + 1;
+                let h = (((h - self.grid.x0) / res) - 0.5).floor() as i64 - 1;
+                (l, h)
+            });
+            let row = j as usize * self.grid.nx;
+            let mut i = i0;
+            while i <= i1 {
+                if let Some((l, h)) = inner
+                    && i >= l
+                    && i <= h
+                {
+                    i = h + 1;
+                    continue;
+                }
+                let k = row + i as usize;
+                if self.s[k] > zf {
+                    let q = DVec2::new(self.grid.x0 + (i as f64 + 0.5) * res, y);
+                    let t = ((q - a).dot(ab) * inv).clamp(0.0, 1.0);
+                    if (a + ab * t - q).length_squared() <= r * r {
+                        self.lower(k, zf);
+                    }
+                }
+                i += 1;
+            }
+        }
+    }
+
+    /// Fills `out[i]` with whether material stands more than `eps` above `z` at `c + ring[i]`
+    /// (the ring of [`Self::ring`]).
+    pub fn ring_material(&self, c: DVec2, z: f64, out: &mut Vec<bool>) {
+        let zq = (z + self.eps) as f32;
+        out.clear();
+        for off in &self.circ {
+            let q = c + *off;
+            out.push(self.grid.cell_of(q).is_some_and(|(i, j)| self.s[j * self.grid.nx + i] > zq));
+        }
+    }
+
+    /// The tool circumference sampled like the pixel method: offsets from the tool centre,
+    /// counter-clockwise from +X, half a cell outside the tool.
+    pub fn ring(&self) -> &[DVec2] {
+        &self.circ
+    }
+
+    /// Front-half engagement (degrees) by the pixel ring at `c` moving along `dir`, against the
+    /// stock as it is (no exclusion of the current move: for planning, where the stock is cut
+    /// step by step).
+    pub fn front_engagement(&self, c: DVec2, z: f64, dir: DVec2) -> f64 {
+        let zq = (z + self.eps) as f32;
+        let mut hit = 0usize;
+        for off in &self.circ {
+            if off.dot(dir) < 0.0 {
+                continue;
+            }
+            let q = c + *off;
+            if let Some((i, j)) = self.grid.cell_of(q)
+                && self.s[j * self.grid.nx + i] > zq
+            {
+                hit += 1;
+            }
+        }
+        360.0 * hit as f64 / self.circ.len() as f64
+    }
+
+    /// Material standing more than `eps` above `z` at `q`.
+    pub fn material_at(&self, q: DVec2, z: f64) -> bool {
+        self.grid.cell_of(q).is_some_and(|(i, j)| self.s[j * self.grid.nx + i] > (z + self.eps) as f32)
+    }
+
+    /// Cells of the part and fixtures grown by the allowance (where the protected height is above
+    /// the floor).
+    pub fn keep_mask(&self) -> Vec<bool> {
+        let fl = self.floor_eff as f32;
+        self.p.iter().map(|p| *p > fl).collect()
+    }
+
+    /// Cells the tool can reach.
+    pub fn reach_mask(&self) -> &[bool] {
+        &self.reach
     }
 
     /// Engagement by paper 1 eq. 4: the share of the tool's circumference pixels that hold
@@ -622,6 +790,33 @@ impl RasterSim {
     /// Current stock heights (row-major, −∞ where there is no stock).
     pub fn heights(&self) -> &[f32] {
         &self.s
+    }
+
+    /// The reachable material standing more than `eps` above `z`, as an area (rows of cells
+    /// merged into rectangles).
+    pub fn material_area(&self, z: f64) -> Area {
+        let thr = (z + self.eps) as f32;
+        let res = self.grid.res;
+        let mut rings = Vec::new();
+        for j in 0..self.grid.ny {
+            let row = j * self.grid.nx;
+            let y0 = self.grid.y0 + j as f64 * res;
+            let mut i = 0;
+            while i < self.grid.nx {
+                if self.reach[row + i] && self.s[row + i] > thr {
+                    let start = i;
+                    while i < self.grid.nx && self.reach[row + i] && self.s[row + i] > thr {
+                        i += 1;
+                    }
+                    let x0 = self.grid.x0 + start as f64 * res;
+                    let x1 = self.grid.x0 + i as f64 * res;
+                    rings.push(vec![DVec2::new(x0, y0), DVec2::new(x1, y0), DVec2::new(x1, y0 + res), DVec2::new(x0, y0 + res)]);
+                } else {
+                    i += 1;
+                }
+            }
+        }
+        Area::from_rings(&rings, crate::geom::area::Fill::NonZero)
     }
 
     /// Centres of the cells of rest material (reachable and standing), for pictures.

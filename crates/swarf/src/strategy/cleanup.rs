@@ -44,9 +44,33 @@ pub fn passes(g: &LayerGeom, params: &Params, existing: &[Pass]) -> Vec<Pass> {
         if left.is_empty() {
             break;
         }
-        let zone = left.offset(g.r, REGION_TOL).intersection(&g.centres);
-        let step = g.step / f64::from(1u32 << refine);
-        let mut new = Vec::new();
+        let new = level_curves(g, params, &left, g.step / f64::from(1u32 << refine));
+        if new.is_empty() {
+            break;
+        }
+        let all: Vec<Pass> = existing.iter().chain(out.iter()).chain(new.iter()).cloned().collect();
+        left = leftover(g, &all);
+        out.extend(new);
+    }
+    out
+}
+
+/// Passes for a leftover known otherwise (the adaptive strategy reads it off its material
+/// model): level curves at a quarter of the stepover near it, in one round.
+pub fn passes_for_leftover(g: &LayerGeom, params: &Params, left: &Area) -> Vec<Pass> {
+    let left = left.offset(-SLIVER, REGION_TOL).offset(SLIVER, REGION_TOL).intersection(left).without_slivers(0.01);
+    if left.is_empty() {
+        return Vec::new();
+    }
+    level_curves(g, params, &left, g.step / 4.0)
+}
+
+/// Level curves of the wall distance (or of the stock outline without walls) at spacing
+/// `step`, clipped to where the tool touches `left`, farthest from the walls first.
+fn level_curves(g: &LayerGeom, params: &Params, left: &Area, step: f64) -> Vec<Pass> {
+    let zone = left.offset(g.r, REGION_TOL).intersection(&g.centres);
+    let mut new = Vec::new();
+    {
         if g.keep.is_empty() {
             let mut k = 1usize;
             loop {
@@ -83,14 +107,8 @@ pub fn passes(g: &LayerGeom, params: &Params, existing: &[Pass]) -> Vec<Pass> {
                 k += 1;
             }
         }
-        if new.is_empty() {
-            break;
-        }
-        // farthest from the walls first, like the clearing
-        new.sort_by(|a, b| b.level.total_cmp(&a.level));
-        let all: Vec<Pass> = existing.iter().chain(out.iter()).chain(new.iter()).cloned().collect();
-        left = leftover(g, &all);
-        out.extend(new);
     }
-    out
+    // farthest from the walls first, like the clearing
+    new.sort_by(|a, b| b.level.total_cmp(&a.level));
+    new
 }

@@ -25,12 +25,16 @@ pub const LANDING_MARGIN: f64 = 0.02;
 /// How much farther than its radius the tool axis stays from the walls (mm): the arc-fitting
 /// tolerance plus a micrometre, so that no fitted arc comes closer than the radius.
 pub fn wall_margin(params: &Params) -> f64 {
-    params.arc_tol + 0.001
+    // adaptive passes are also simplified (Douglas–Peucker) before arc fitting
+    let dp = if params.strategy == StrategyKind::Adaptive { crate::plan::adaptive::DP_TOL } else { 0.0 };
+    params.arc_tol + 0.001 + dp
 }
 
 /// The strategies swarf has.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StrategyKind {
+    /// Adaptive clearing with a bound on tool engagement (paper 1).
+    Adaptive,
     /// Contour-parallel offsets.
     Offset,
     /// Direction-parallel zigzag.
@@ -41,6 +45,7 @@ impl StrategyKind {
     /// Parses a strategy name.
     pub fn parse(s: &str) -> Option<StrategyKind> {
         match s {
+            "adaptive" => Some(StrategyKind::Adaptive),
             "offset" | "contour" => Some(StrategyKind::Offset),
             "zigzag" | "raster" => Some(StrategyKind::Zigzag),
             _ => None,
@@ -49,6 +54,7 @@ impl StrategyKind {
     /// Its name.
     pub fn name(self) -> &'static str {
         match self {
+            StrategyKind::Adaptive => "adaptive",
             StrategyKind::Offset => "offset",
             StrategyKind::Zigzag => "zigzag",
         }
@@ -94,6 +100,12 @@ pub struct Params {
     pub approach: f64,
     /// Entry (ramp, helix, plunge) feed as a fraction of the cutting feed.
     pub entry_feed_frac: f64,
+    /// Adaptive: how far above the reference engagement contouring along a wall may go before
+    /// the tool turns back to constant-engagement milling (paper 1 §4.4), degrees.
+    pub overshoot_deg: f64,
+    /// Adaptive: raise the feed where the engagement is low (paper 1 §5), up to this factor
+    /// (1 = off).
+    pub feed_boost: f64,
 }
 
 impl Default for Params {
@@ -112,6 +124,8 @@ impl Default for Params {
             clearance: 5.0,
             approach: 1.0,
             entry_feed_frac: 0.5,
+            overshoot_deg: 20.0,
+            feed_boost: 1.0,
         }
     }
 }
@@ -196,9 +210,14 @@ impl LayerGeom {
 /// The passes of `strategy` for one level (the same at every level of a 2.5D job).
 pub fn passes(job: &Job, geom: &LayerGeom, params: &Params) -> Result<Vec<Pass>> {
     let mut out = match params.strategy {
+        // adaptive passes are made while linking (they depend on the material left)
+        StrategyKind::Adaptive => Vec::new(),
         StrategyKind::Offset => offset::passes(geom, params),
         StrategyKind::Zigzag => zigzag::passes(geom, params),
     };
+    if params.strategy == StrategyKind::Adaptive {
+        return Ok(out);
+    }
     let t = std::time::Instant::now();
     let extra = cleanup::passes(geom, params, &out);
     if std::env::var("SWARF_DEBUG").is_ok() {

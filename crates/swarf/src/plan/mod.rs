@@ -26,6 +26,8 @@ use crate::sim::sweep::Path;
 use crate::strategy::{Params, Pass, PassKind};
 use crate::toolpath::{MoveKind, Toolpath};
 
+pub mod adaptive;
+
 /// Builds the program from the passes of each level (`levels[i] = (z, passes)`), then the
 /// finishing passes of each level.
 pub fn link(
@@ -36,24 +38,9 @@ pub fn link(
     finish: &[(f64, Vec<Pass>)],
     sim_opts: &SimOptions,
 ) -> Result<Toolpath> {
-    let mut sim = RasterSim::new(job, regions, sim_opts)?;
-    sim.track_exact = false;
-    let safe_z = job.top() + params.clearance;
     let first =
         levels.iter().flat_map(|l| l.1.iter()).next().and_then(|p| p.pts.first().copied()).unwrap_or(DVec2::ZERO);
-    let tp = Toolpath::new(job.tool.clone(), DVec3::new(first.x, first.y, safe_z), safe_z);
-    let mut l = Linker {
-        job,
-        params,
-        sim,
-        tp,
-        safe_z,
-        r: job.radius(),
-        feed: job.feed,
-        entry_feed: job.feed * params.entry_feed_frac,
-        down_at: None,
-        step: job.stepover_mm(),
-    };
+    let mut l = Linker::new(job, regions, params, sim_opts, first)?;
     let nl = levels.len();
     for (i, (z, passes)) in levels.iter().enumerate() {
         l.tp.note(format!("level {} of {}: z {:.3}", i + 1, nl, z));
@@ -69,10 +56,7 @@ pub fn link(
             l.pass(p, *z);
         }
     }
-    let end = l.tp.end();
-    l.tp.note("end: retract");
-    l.tp.rapid(DVec3::new(end.x, end.y, safe_z));
-    Ok(l.tp)
+    Ok(l.finish())
 }
 
 /// Keeps the strategy's order, except that clean-up passes of one level are visited nearest
@@ -116,7 +100,7 @@ fn order(passes: &[Pass], from: DVec2) -> Vec<Pass> {
     out
 }
 
-struct Linker<'a> {
+pub(crate) struct Linker<'a> {
     job: &'a Job,
     params: &'a Params,
     sim: RasterSim,
@@ -128,9 +112,40 @@ struct Linker<'a> {
     /// The level the tool is down at, if it is.
     down_at: Option<f64>,
     step: f64,
+    /// Moves pushed now were already cut into the model (adaptive passes).
+    precut: bool,
 }
 
-impl Linker<'_> {
+impl<'a> Linker<'a> {
+    /// A linker with a fresh planning model, the tool at the safe height above `first`.
+    fn new(job: &'a Job, regions: &Regions, params: &'a Params, sim_opts: &SimOptions, first: DVec2) -> Result<Self> {
+        let mut sim = RasterSim::new(job, regions, sim_opts)?;
+        sim.track_exact = false;
+        let safe_z = job.top() + params.clearance;
+        let tp = Toolpath::new(job.tool.clone(), DVec3::new(first.x, first.y, safe_z), safe_z);
+        Ok(Linker {
+            job,
+            params,
+            sim,
+            tp,
+            safe_z,
+            r: job.radius(),
+            feed: job.feed,
+            entry_feed: job.feed * params.entry_feed_frac,
+            down_at: None,
+            step: job.stepover_mm(),
+            precut: false,
+        })
+    }
+
+    /// Retracts and hands over the program.
+    fn finish(mut self) -> Toolpath {
+        let end = self.tp.end();
+        self.tp.note("end: retract");
+        self.tp.rapid(DVec3::new(end.x, end.y, self.safe_z));
+        self.tp
+    }
+
     fn push_line(&mut self, kind: MoveKind, to: DVec3, feed: f64) {
         let from = self.tp.end();
         if (to - from).length() < 1e-9 {
@@ -141,7 +156,9 @@ impl Linker<'_> {
         } else {
             self.tp.line(kind, to, feed);
         }
-        if let Some(m) = self.tp.moves.last().copied() {
+        if !self.precut
+            && let Some(m) = self.tp.moves.last().copied()
+        {
             self.sim.cut(&Path::of(from, &m));
         }
     }
@@ -152,7 +169,9 @@ impl Linker<'_> {
             return;
         }
         self.tp.arc(kind, to, center, ccw, feed);
-        if let Some(m) = self.tp.moves.last().copied() {
+        if !self.precut
+            && let Some(m) = self.tp.moves.last().copied()
+        {
             self.sim.cut(&Path::of(from, &m));
         }
     }
@@ -393,10 +412,19 @@ impl Linker<'_> {
     }
 
     fn helix(&mut self, c: DVec2, rh: f64, z_from: f64, z: f64, pts: &[DVec2]) {
-        let ccw = self.params.climb; // material outside the circle: on the right when ccw
         // start on the circle opposite the pass direction, so the last turn ends facing it
         let dir = if pts.len() > 1 { (pts[1] - pts[0]).normalize_or_zero() } else { DVec2::X };
         let a0 = if dir.length_squared() > 0.0 { dir.y.atan2(dir.x) + std::f64::consts::PI } else { 0.0 };
+        self.helix_down(c, rh, z_from, z, a0);
+        self.push_line(MoveKind::Cut, c.extend(z), self.feed);
+    }
+
+    /// A helix of radius `rh` around `c` from `z_from` down to `z`, starting at angle `a0`, then
+    /// one full turn at depth that cleans the bottom; returns the angle it ends at (on the
+    /// circle). Counter-clockwise for climb milling (the material outside the circle is then on
+    /// the tool's right).
+    fn helix_down(&mut self, c: DVec2, rh: f64, z_from: f64, z: f64, a0: f64) -> f64 {
+        let ccw = self.params.climb;
         let on = |a: f64| c + rh * DVec2::new(a.cos(), a.sin());
         self.travel(c, z_from);
         self.tp.note(format!("helix entry r {:.3} at X{:.3} Y{:.3}", rh, c.x, c.y));
@@ -410,11 +438,10 @@ impl Linker<'_> {
             let a = a0 + s * total * t;
             self.push_arc(MoveKind::Entry, on(a).extend(z_from + (z - z_from) * t), c, ccw, self.entry_feed);
         }
-        // one full turn at depth cleans the bottom, then to the centre
         let a_end = a0 + s * total;
         self.push_arc(MoveKind::Cut, on(a_end + s * std::f64::consts::PI).extend(z), c, ccw, self.feed);
         self.push_arc(MoveKind::Cut, on(a_end).extend(z), c, ccw, self.feed);
-        self.push_line(MoveKind::Cut, c.extend(z), self.feed);
+        a_end
     }
 
     fn ramp(&mut self, prefix: &[DVec2], z_from: f64, z: f64) {

@@ -1,0 +1,124 @@
+//! Exact Euclidean distance transform on a grid (Felzenszwalb & Huttenlocher 2012, "Distance
+//! transforms of sampled functions"): two passes of the lower envelope of parabolas, linear in
+//! the number of cells. Written here because the crates that have it (imageproc) bring an image
+//! stack with them and work on their own image types; this is sixty lines over a plain slice.
+
+/// Squared distances along one line: `f` holds 0 at sites and `INF` elsewhere (or the squared
+/// distances of the previous pass); the result overwrites `d`.
+fn pass_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
+    let n = f.len();
+    if n == 0 {
+        return;
+    }
+    let mut k = 0usize;
+    v[0] = 0;
+    z[0] = f32::NEG_INFINITY;
+    z[1] = f32::INFINITY;
+    for q in 1..n {
+        if f[q] >= INF {
+            continue;
+        }
+        loop {
+            let p = v[k];
+            if f[p] >= INF {
+                // the only parabola so far is an empty site: replace it
+                v[k] = q;
+                z[k] = f32::NEG_INFINITY;
+                z[k + 1] = f32::INFINITY;
+                break;
+            }
+            let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32)) / (2.0 * q as f32 - 2.0 * p as f32);
+            if s <= z[k] && k > 0 {
+                k -= 1;
+                continue;
+            }
+            if s <= z[k] {
+                v[k] = q;
+                z[k] = f32::NEG_INFINITY;
+                z[k + 1] = f32::INFINITY;
+                break;
+            }
+            k += 1;
+            v[k] = q;
+            z[k] = s;
+            z[k + 1] = f32::INFINITY;
+            break;
+        }
+    }
+    if f[v[0]] >= INF && k == 0 {
+        d.iter_mut().for_each(|x| *x = INF);
+        return;
+    }
+    k = 0;
+    for (q, dq) in d.iter_mut().enumerate() {
+        while z[k + 1] < q as f32 {
+            k += 1;
+        }
+        let p = v[k];
+        let dx = q as f32 - p as f32;
+        *dq = dx * dx + f[p];
+    }
+}
+
+/// "Infinitely far" in squared cells.
+pub const INF: f32 = 1e20;
+
+/// Distance (in cells) from every cell to the nearest cell where `site` is true, over an
+/// `nx × ny` row-major grid; `INF.sqrt()`-like large values where there is no site at all.
+pub fn distance(site: &[bool], nx: usize, ny: usize) -> Vec<f32> {
+    let mut g: Vec<f32> = site.iter().map(|s| if *s { 0.0 } else { INF }).collect();
+    let m = nx.max(ny) + 1;
+    let mut v = vec![0usize; m];
+    let mut z = vec![0f32; m + 1];
+    let mut col = vec![0f32; ny];
+    let mut out = vec![0f32; ny];
+    for i in 0..nx {
+        for j in 0..ny {
+            col[j] = g[j * nx + i];
+        }
+        pass_1d(&col, &mut out, &mut v, &mut z);
+        for j in 0..ny {
+            g[j * nx + i] = out[j];
+        }
+    }
+    let mut row = vec![0f32; nx];
+    let mut outr = vec![0f32; nx];
+    for j in 0..ny {
+        row.copy_from_slice(&g[j * nx..(j + 1) * nx]);
+        pass_1d(&row, &mut outr, &mut v, &mut z);
+        g[j * nx..(j + 1) * nx].copy_from_slice(&outr);
+    }
+    g.iter().map(|d2| if *d2 >= INF { f32::INFINITY } else { d2.sqrt() }).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn matches_brute_force() {
+        let (nx, ny) = (37, 23);
+        let mut site = vec![false; nx * ny];
+        let mut s: u64 = 7;
+        for k in 0..nx * ny {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1);
+            site[k] = (s >> 60) == 0;
+        }
+        let d = distance(&site, nx, ny);
+        for j in 0..ny {
+            for i in 0..nx {
+                let mut best = f32::INFINITY;
+                for jj in 0..ny {
+                    for ii in 0..nx {
+                        if site[jj * nx + ii] {
+                            let dd = (((i as i64 - ii as i64).pow(2) + (j as i64 - jj as i64).pow(2)) as f32).sqrt();
+                            best = best.min(dd);
+                        }
+                    }
+                }
+                assert!((d[j * nx + i] - best).abs() < 1e-3, "({i},{j}) {} vs {best}", d[j * nx + i]);
+            }
+        }
+        assert!(distance(&[false; 6], 3, 2).iter().all(|x| x.is_infinite()));
+    }
+}
