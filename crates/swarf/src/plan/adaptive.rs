@@ -54,6 +54,9 @@ pub const DP_TOL: f64 = 0.002;
 /// How much above the reference a constant-engagement step may read before it is steered away
 /// from the material, degrees.
 const STEP_SLACK_DEG: f64 = 3.0;
+/// Largest engagement above the reference that contouring tolerates before it switches back
+/// to constant engagement, degrees.
+const CONTOUR_SLACK_DEG: f64 = 5.0;
 /// Engagement below which contouring counts as cutting air, degrees.
 const AIR_DEG: f64 = 3.0;
 /// Degrees skipped at the tool's side when looking for the engaged arc (eq. 8).
@@ -164,6 +167,31 @@ impl Walls {
         (a + (b - a) * t, (b - a).normalize_or_zero())
     }
 
+    /// The vertices of `ring` strictly between arc lengths `s0` and `s1` (either direction, less
+    /// than one turn), in the order of travel.
+    fn between(&self, ring: usize, s0: f64, s1: f64) -> Vec<DVec2> {
+        let r = &self.rings[ring];
+        let c = &self.cum[ring];
+        let total = self.len(ring);
+        if total <= 0.0 || (s1 - s0).abs() >= total {
+            return Vec::new();
+        }
+        let n = r.len();
+        let mut out = Vec::new();
+        let a = s0.rem_euclid(total);
+        let d = s1 - s0;
+        // vertex i sits at c[i]; walk from a by d
+        for i in 0..n {
+            let v = c[i];
+            let off = if d >= 0.0 { (v - a).rem_euclid(total) } else { (a - v).rem_euclid(total) };
+            if off > 1e-9 && off < d.abs() - 1e-9 {
+                out.push((off, r[i]));
+            }
+        }
+        out.sort_by(|x, y| x.0.total_cmp(&y.0));
+        out.into_iter().map(|x| x.1).collect()
+    }
+
     /// The point of the contours nearest to `p`: ring, arc length, point.
     fn project(&self, p: DVec2, max: f64) -> Option<(usize, f64, DVec2)> {
         let mut best: Option<(f64, usize, f64, DVec2)> = None;
@@ -222,6 +250,8 @@ struct Engine<'a, 'b> {
     /// Distance to the walls (mm) per cell of the planning grid.
     dk: Vec<f32>,
     resume: Vec<Resume>,
+    /// Lateral starts that removed next to nothing this level (not tried again).
+    failed: Vec<DVec2>,
     flags: Vec<bool>,
     boost_ring: Vec<DVec2>,
     z: f64,
@@ -252,11 +282,19 @@ impl<'a, 'b> Engine<'a, 'b> {
             walls,
             dk,
             resume: Vec::new(),
+            failed: Vec::new(),
             flags: Vec::new(),
             boost_ring,
             z: 0.0,
             why: "",
         }
+    }
+
+    /// Engagement above the reference at which contouring gives way to constant engagement:
+    /// the overshoot of §4.4, but at most `CONTOUR_SLACK_DEG`, so that the wall-following
+    /// stays well inside the stated bound.
+    fn switch_slack(&self) -> f64 {
+        (0.5 * self.over).min(CONTOUR_SLACK_DEG)
     }
 
     /// Distance from `p` to the walls read from the grid (±one cell).
@@ -283,6 +321,7 @@ impl<'a, 'b> Engine<'a, 'b> {
     fn level(&mut self, z: f64) -> Vec<Vec<DVec2>> {
         self.z = z;
         self.resume.clear();
+        self.failed.clear();
         self.l.sim.begin_level(z);
         let mut passes = Vec::new();
         let total = self.l.sim.reach_left().max(1);
@@ -296,6 +335,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                 Start::Helix { .. } => "helix",
                 Start::Plunge { .. } => "plunge",
             };
+            let lateral_at = if let Start::Lateral { at, .. } = &start { Some(*at) } else { None };
             let pass = self.run(start);
             if std::env::var("SWARF_DEBUG").is_ok() {
                 eprintln!(
@@ -315,8 +355,11 @@ impl<'a, 'b> Engine<'a, 'b> {
             // a pass that removes next to nothing, again and again: stop, the clean-up takes
             // what is left
             if before - self.l.sim.reach_left() < 4 {
+                if let Some(at) = lateral_at {
+                    self.failed.push(at);
+                }
                 idle += 1;
-                if idle > 8 {
+                if idle > 30 {
                     break;
                 }
             } else {
@@ -339,7 +382,7 @@ impl<'a, 'b> Engine<'a, 'b> {
             let (ahead, _) = self.walls.at(rp.ring, rp.s + rp.dir * self.step);
             let e = self.l.sim.front_engagement(ahead, self.z, t);
             // nothing left there, or still too heavy to follow the wall: drop it
-            if e > self.theta + 0.5 * self.over
+            if e > self.theta + self.switch_slack()
                 || (e < AIR_DEG && self.l.sim.front_engagement(p + t * self.r, self.z, t) < AIR_DEG)
             {
                 continue;
@@ -360,6 +403,8 @@ impl<'a, 'b> Engine<'a, 'b> {
         }
         // 3. helix at the farthest point from the walls that has material, 4. plunge
         let (c, d) = self.deepest()?;
+        // the grid's distance is good to a cell: measure exactly at the chosen centre
+        let d = d.min(self.l.sim.keep_distance(&Path::Line { a: c.extend(0.0), b: c.extend(0.0) }, d + 1.0));
         let room = d - self.r - self.margin - 0.005;
         let rh = (self.l.params.helix_radius_frac * self.r).min(room);
         if rh >= self.l.params.helix_min_frac * self.r {
@@ -416,6 +461,9 @@ impl<'a, 'b> Engine<'a, 'b> {
                 if dk < self.r + self.margin + cell {
                     continue;
                 }
+                if self.failed.iter().any(|f| (*f - p).length() < 2.0 * cell) {
+                    continue;
+                }
                 // not tangent to the part (§4.5): starts that are within a tool diameter of the
                 // walls come after all the others, which clear toward the walls first
                 let near_wall = dk < 3.0 * self.r + self.margin;
@@ -433,7 +481,7 @@ impl<'a, 'b> Engine<'a, 'b> {
             let u = DVec2::new(dir.cos(), dir.sin());
             let mut q = p;
             let fine = g.res;
-            for _ in 0..((3.0 * cell / fine) as usize) {
+            for _ in 0..((4.0 * cell / fine) as usize) {
                 let n = q + u * fine;
                 if !self.clear(n) || !self.allowed(n) {
                     break;
@@ -524,7 +572,7 @@ impl<'a, 'b> Engine<'a, 'b> {
         pts.push(c);
         let mut air = 0.0;
         let mut steps = 0usize;
-        let max_steps = 2_000_000;
+        let max_steps = 200_000;
         loop {
             steps += 1;
             if steps > max_steps {
@@ -533,13 +581,37 @@ impl<'a, 'b> Engine<'a, 'b> {
             match mode {
                 Mode::Engage => match self.engage_step(c, alpha) {
                     EngageStep::Moved(n, a) => {
+                        let left = self.l.sim.reach_left();
                         self.l.sim.cut_step(c, n, z);
                         c = n;
                         alpha = a;
                         pts.push(c);
+                        // circling without removing anything the tool must clear
+                        air = if self.l.sim.reach_left() == left { air + self.step } else { 0.0 };
+                        if air > TAU * self.r {
+                            self.why = "constant engagement in air";
+                            break;
+                        }
                     }
                     EngageStep::Wall => {
                         let Some((ring, s, q)) = self.walls.project(c, 3.0 * self.step + self.r) else { break };
+                        // the wall ahead is too heavy to follow: leave it, turning away from
+                        // the material, when that is possible
+                        {
+                            let (_, t) = self.walls.at(ring, s);
+                            let dir = self.contour_direction(q, t, alpha);
+                            let (n, t2) = self.walls.at(ring, s + dir * self.step);
+                            let e = self.l.sim.front_engagement(n, z, t2 * dir);
+                            if e > self.theta + self.switch_slack()
+                                && let Some((n2, a)) = self.away_step(c, alpha)
+                            {
+                                self.l.sim.cut_step(c, n2, z);
+                                c = n2;
+                                alpha = a;
+                                pts.push(c);
+                                continue;
+                            }
+                        }
                         if (q - c).length() > 1e-9 {
                             if !self.segment_allowed(c, q) {
                                 break;
@@ -564,10 +636,19 @@ impl<'a, 'b> Engine<'a, 'b> {
                     let (n, t) = self.walls.at(ring, ns);
                     let t = t * dir;
                     let e = self.l.sim.front_engagement(n, z, t);
-                    if e > self.theta + 0.5 * self.over || (e > self.theta && self.turns_away(c, alpha, t)) {
+                    if e > self.theta + self.switch_slack() || (e > self.theta && self.turns_away(c, alpha, t)) {
                         // back to constant engagement when a step of it is possible; come back
                         // here later (§4.5)
-                        match self.engage_step(c, alpha) {
+                        let mut es = self.engage_step(c, alpha);
+                        if matches!(es, EngageStep::Wall)
+                            && let Some((n2, a)) = self.away_step(c, alpha)
+                        {
+                            es = EngageStep::Moved(n2, a);
+                        }
+                        if std::env::var("SWARF_DEBUG_SW").is_ok() {
+                            eprintln!("switch at {c:.2} e {e:.1} -> {}", match &es { EngageStep::Moved(n2, a) => format!("moved {n2:.2} {:.0}", a.to_degrees()), EngageStep::Wall => "wall".into(), EngageStep::Done => "done".into() });
+                        }
+                        match es {
                             EngageStep::Moved(n2, a) => {
                                 self.resume.push(Resume { ring, s, dir });
                                 mode = Mode::Engage;
@@ -587,6 +668,12 @@ impl<'a, 'b> Engine<'a, 'b> {
                         }
                     }
                     let left = self.l.sim.reach_left();
+                    // follow the contour through its own vertices (its round corners)
+                    for q in self.walls.between(ring, s, ns) {
+                        self.l.sim.cut_step(c, q, z);
+                        c = q;
+                        pts.push(c);
+                    }
                     self.l.sim.cut_step(c, n, z);
                     c = n;
                     alpha = t.y.atan2(t.x);
@@ -652,6 +739,17 @@ impl<'a, 'b> Engine<'a, 'b> {
         let h = (z + self.l.params.approach).max(if top.is_finite() { top + self.l.params.approach } else { z });
         self.l.travel(p, h);
         self.l.push_line(MoveKind::Descend, p.extend(z), self.l.entry_feed);
+    }
+
+    /// The whole step keeps its clearance from the walls (a step between two allowed points can
+    /// cut the corner of a convex wall by up to Δ²/8ρ).
+    fn step_allowed(&self, a: DVec2, b: DVec2) -> bool {
+        let need = self.r + self.margin;
+        let res = self.l.sim.grid.res;
+        if self.dk_at(a).min(self.dk_at(b)) >= need + (b - a).length() + 2.0 * res {
+            return true;
+        }
+        self.l.sim.keep_distance(&Path::Line { a: a.extend(0.0), b: b.extend(0.0) }, need + 1.0) >= need - 1e-9
     }
 
     fn segment_allowed(&self, a: DVec2, b: DVec2) -> bool {
@@ -772,10 +870,38 @@ impl<'a, 'b> Engine<'a, 'b> {
         if std::env::var("SWARF_DEBUG_CE").is_ok() {
             eprintln!("c {c:.2} ap {:.1} guess {:.1} e0 {e0:.1} -> alpha {:.1} e {:.1}", alpha_p.to_degrees(), guess.to_degrees(), alpha.to_degrees(), eval(self, alpha));
         }
-        if !self.allowed(n) {
+        if !self.allowed(n) || !self.step_allowed(c, n) {
             return EngageStep::Wall;
         }
         EngageStep::Moved(n, alpha)
+    }
+
+    /// When the heading of eq. 9 runs into a wall: the heading nearest to it, turned away from
+    /// the material within the front half, that the walls allow and that does not engage more
+    /// than the reference (+ slack).
+    fn away_step(&mut self, c: DVec2, alpha_p: f64) -> Option<(DVec2, f64)> {
+        let guess = self.direction(c, alpha_p)?;
+        let guess = alpha_p + wrap_pi(guess - alpha_p).clamp(-FRAC_PI_2, FRAC_PI_2);
+        let away = if self.climb { 1.0 } else { -1.0 };
+        let end = alpha_p + away * FRAC_PI_2;
+        let span = wrap_pi(end - guess) * away;
+        if span <= 0.0 {
+            return None;
+        }
+        let n_try = (span.to_degrees() / 4.0).ceil() as usize;
+        for k in 1..=n_try {
+            let a = guess + away * span * k as f64 / n_try as f64;
+            let u = DVec2::new(a.cos(), a.sin());
+            let n = c + u * self.step;
+            if !self.allowed(n) || !self.step_allowed(c, n) {
+                continue;
+            }
+            let e = self.l.sim.front_engagement(n, self.z, u);
+            if e <= self.theta + STEP_SLACK_DEG && e > AIR_DEG {
+                return Some((n, a));
+            }
+        }
+        None
     }
 
     /// Simplifies, arc-fits and appends the pass (the material was cut step by step already).
