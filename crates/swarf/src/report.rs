@@ -124,6 +124,10 @@ pub struct Report {
     pub gouge_max_mm: f64,
     /// Where the first gouges are (move index in the toolpath, place, depth); at most 20.
     pub gouge_at: Vec<crate::sim::raster::Event>,
+    /// Where the first plunges are; at most 20.
+    pub plunge_at: Vec<crate::sim::raster::Event>,
+    /// Where the first rapid collisions are; at most 20.
+    pub rapid_collision_at: Vec<crate::sim::raster::Event>,
     /// Rapids through uncut material.
     pub rapid_collisions: usize,
     /// Reachable material left, mm².
@@ -178,6 +182,8 @@ pub fn fill(rep: &mut Report, tp: &Toolpath, replay: &Replay, rest: &Rest, rapid
     rep.gouges = replay.gouges.len();
     rep.gouge_max_mm = replay.gouges.iter().map(|g| g.depth).fold(0.0, f64::max);
     rep.gouge_at = replay.gouges.iter().take(20).cloned().collect();
+    rep.plunge_at = replay.plunges.iter().take(20).cloned().collect();
+    rep.rapid_collision_at = replay.rapid_collisions.iter().take(20).cloned().collect();
     rep.rapid_collisions = replay.rapid_collisions.len();
     rep.rest_area_mm2 = rest.area_mm2;
     rep.rest_volume_mm3 = rest.volume_mm3;

@@ -222,8 +222,8 @@ struct Resume {
 enum Start {
     /// Continue a contour at `s` along `ring` in direction `dir` (±1), landing `land` mm behind.
     Resume { ring: usize, s: f64, dir: f64, land: f64 },
-    /// Land beside the stock at `at` and head along `dir`.
-    Lateral { at: DVec2, dir: f64 },
+    /// Land beside the stock at `at` (found from the candidate `from`) and head along `dir`.
+    Lateral { at: DVec2, from: DVec2, dir: f64 },
     /// Helix of radius `r` around `c`.
     Helix { c: DVec2, r: f64 },
     /// Plunge at `c` (nothing else fits).
@@ -335,7 +335,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                 Start::Helix { .. } => "helix",
                 Start::Plunge { .. } => "plunge",
             };
-            let lateral_at = if let Start::Lateral { at, .. } = &start { Some(*at) } else { None };
+            let lateral_at = if let Start::Lateral { from, .. } = &start { Some(*from) } else { None };
             let pass = self.run(start);
             if std::env::var("SWARF_DEBUG").is_ok() {
                 eprintln!(
@@ -348,6 +348,13 @@ impl<'a, 'b> Engine<'a, 'b> {
                     self.l.sim.reach_left(),
                     self.why
                 );
+            }
+            if let Ok(v) = std::env::var("SWARF_DEBUG_CELL") {
+                let xy: Vec<f64> = v.split(',').filter_map(|t| t.parse().ok()).collect();
+                let g = self.l.sim.grid;
+                if let Some((i, j)) = g.cell_of(DVec2::new(xy[0], xy[1])) {
+                    eprintln!("cell after pass {} ({kind}, {} pts): {}", passes.len(), pass.len(), self.l.sim.heights()[j * g.nx + i]);
+                }
             }
             if pass.len() > 1 {
                 passes.push(pass);
@@ -398,8 +405,8 @@ impl<'a, 'b> Engine<'a, 'b> {
             }
         }
         // 2. lateral entry tangent to the stock from free or cleared space
-        if let Some((at, dir)) = self.lateral() {
-            return Some(Start::Lateral { at, dir });
+        if let Some((at, from, dir)) = self.lateral() {
+            return Some(Start::Lateral { at, from, dir });
         }
         // 3. helix at the farthest point from the walls that has material, 4. plunge
         let (c, d) = self.deepest()?;
@@ -416,14 +423,17 @@ impl<'a, 'b> Engine<'a, 'b> {
         }
     }
 
-    /// No material within the tool (plus the landing margin) at `p`.
+    /// No material within the tool (plus the landing margin) at `p`. The model's cells are
+    /// cut by their centres, so a cell counted as cut can still hold material up to half a
+    /// cell from its centre: the test reaches one and a half cells further.
     fn clear(&self, p: DVec2) -> bool {
-        self.l.top_near(p, self.r + crate::strategy::LANDING_MARGIN) <= self.z + 0.01
+        let rho = self.r + crate::strategy::LANDING_MARGIN + 1.5 * self.l.sim.grid.res;
+        self.l.top_near(p, rho) <= self.z + 0.01
     }
 
     /// A tool centre that is clear, allowed and within a few cells of remaining material,
     /// nearest to where the tool is; with the direction toward the material.
-    fn lateral(&mut self) -> Option<(DVec2, f64)> {
+    fn lateral(&mut self) -> Option<(DVec2, DVec2, f64)> {
         let g = self.l.sim.grid;
         // coarse grid: blocks of `f` cells, a block has material if any of its cells does
         let f = ((self.r / 4.0) / g.res).floor().max(1.0) as usize;
@@ -461,7 +471,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                 if dk < self.r + self.margin + cell {
                     continue;
                 }
-                if self.failed.iter().any(|f| (*f - p).length() < 2.0 * cell) {
+                if self.failed.iter().any(|f| (*f - p).length() < 1.5 * cell) {
                     continue;
                 }
                 // not tangent to the part (§4.5): starts that are within a tool diameter of the
@@ -488,7 +498,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                 }
                 q = n;
             }
-            return Some((q, dir));
+            return Some((q, p, dir));
         }
         None
     }
@@ -548,7 +558,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                 let t = t * dir;
                 (q, t.y.atan2(t.x), Mode::Contour { ring, s: s - dir * land, dir, walked: 0.0 })
             }
-            Start::Lateral { at, dir } => {
+            Start::Lateral { at, dir, .. } => {
                 self.arrive(at, z);
                 // heading so that the material is on the milling side (the right for climb)
                 let s = if self.climb { 1.0 } else { -1.0 };
@@ -571,6 +581,8 @@ impl<'a, 'b> Engine<'a, 'b> {
         self.l.down_at = Some(z);
         pts.push(c);
         let mut air = 0.0;
+        // points up to the last one that removed material (the air after it is dropped)
+        let mut last_cut = 1usize;
         let mut steps = 0usize;
         let max_steps = 200_000;
         loop {
@@ -582,10 +594,14 @@ impl<'a, 'b> Engine<'a, 'b> {
                 Mode::Engage => match self.engage_step(c, alpha) {
                     EngageStep::Moved(n, a) => {
                         let left = self.l.sim.reach_left();
-                        self.l.sim.cut_step(c, n, z);
+                        self.dbg_step("engage", c, n);
+                        let cut = self.l.sim.cut_step(c, n, z);
                         c = n;
                         alpha = a;
                         pts.push(c);
+                        if cut > 0 {
+                            last_cut = pts.len();
+                        }
                         // circling without removing anything the tool must clear
                         air = if self.l.sim.reach_left() == left { air + self.step } else { 0.0 };
                         if air > TAU * self.r {
@@ -602,21 +618,36 @@ impl<'a, 'b> Engine<'a, 'b> {
                             let dir = self.contour_direction(q, t, alpha);
                             let (n, t2) = self.walls.at(ring, s + dir * self.step);
                             let e = self.l.sim.front_engagement(n, z, t2 * dir);
-                            if e > self.theta + self.switch_slack()
-                                && let Some((n2, a)) = self.away_step(c, alpha)
-                            {
-                                self.l.sim.cut_step(c, n2, z);
+                            // and the step onto the wall must not be heavy either
+                            let e_q = if (q - c).length() > 1e-6 {
+                                self.l.sim.front_engagement(q, z, (q - c).normalize())
+                            } else {
+                                0.0
+                            };
+                            let heavy = e > self.theta + self.switch_slack() || e_q > self.theta + STEP_SLACK_DEG;
+                            if heavy && let Some((n2, a)) = self.away_step(c, alpha) {
+                                self.dbg_step("wall-away", c, n2);
+                                if self.l.sim.cut_step(c, n2, z) > 0 {
+                                    last_cut = pts.len() + 1;
+                                }
                                 c = n2;
                                 alpha = a;
                                 pts.push(c);
                                 continue;
+                            }
+                            if e_q > self.theta + CONTOUR_SLACK_DEG + 5.0 {
+                                self.why = "wall too heavy to reach";
+                                break;
                             }
                         }
                         if (q - c).length() > 1e-9 {
                             if !self.segment_allowed(c, q) {
                                 break;
                             }
-                            self.l.sim.cut_step(c, q, z);
+                            self.dbg_step("to-wall", c, q);
+                            if self.l.sim.cut_step(c, q, z) > 0 {
+                                last_cut = pts.len() + 1;
+                            }
                             c = q;
                             pts.push(c);
                         }
@@ -635,7 +666,16 @@ impl<'a, 'b> Engine<'a, 'b> {
                     let ns = s + dir * self.step;
                     let (n, t) = self.walls.at(ring, ns);
                     let t = t * dir;
-                    let e = self.l.sim.front_engagement(n, z, t);
+                    // the engagement at the step's end and at the contour's vertices on the way
+                    let corners = self.walls.between(ring, s, ns);
+                    let mut e = self.l.sim.front_engagement(n, z, t);
+                    let mut prev = c;
+                    for q in &corners {
+                        if (*q - prev).length() > 1e-6 {
+                            e = e.max(self.l.sim.front_engagement(*q, z, (*q - prev).normalize()));
+                        }
+                        prev = *q;
+                    }
                     if e > self.theta + self.switch_slack() || (e > self.theta && self.turns_away(c, alpha, t)) {
                         // back to constant engagement when a step of it is possible; come back
                         // here later (§4.5)
@@ -652,7 +692,10 @@ impl<'a, 'b> Engine<'a, 'b> {
                             EngageStep::Moved(n2, a) => {
                                 self.resume.push(Resume { ring, s, dir });
                                 mode = Mode::Engage;
-                                self.l.sim.cut_step(c, n2, z);
+                                self.dbg_step("contour-switch", c, n2);
+                                if self.l.sim.cut_step(c, n2, z) > 0 {
+                                    last_cut = pts.len() + 1;
+                                }
                                 c = n2;
                                 alpha = a;
                                 pts.push(c);
@@ -669,19 +712,26 @@ impl<'a, 'b> Engine<'a, 'b> {
                     }
                     let left = self.l.sim.reach_left();
                     // follow the contour through its own vertices (its round corners)
-                    for q in self.walls.between(ring, s, ns) {
-                        self.l.sim.cut_step(c, q, z);
+                    for q in corners {
+                        self.dbg_step("contour-vertex", c, q);
+                        if self.l.sim.cut_step(c, q, z) > 0 {
+                            last_cut = pts.len() + 1;
+                        }
                         c = q;
                         pts.push(c);
                     }
-                    self.l.sim.cut_step(c, n, z);
+                    self.dbg_step("contour", c, n);
+                    let cut = self.l.sim.cut_step(c, n, z);
                     c = n;
                     alpha = t.y.atan2(t.x);
                     pts.push(c);
+                    if cut > 0 {
+                        last_cut = pts.len();
+                    }
                     // air: nothing the tool must clear was removed by this step
                     air = if self.l.sim.reach_left() == left { air + self.step } else { 0.0 };
                     let walked = walked + self.step;
-                    if air > 2.0 * self.r || walked > self.walls.len(ring) + self.step {
+                    if air > self.r || walked > self.walls.len(ring) + self.step {
                         self.why = "contour in air / complete";
                         break;
                     }
@@ -689,6 +739,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                 }
             }
         }
+        pts.truncate(last_cut);
         self.emit(&pts, z);
         pts
     }
@@ -735,7 +786,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                 return;
             }
         }
-        let top = self.l.top_near(p, self.r + crate::strategy::LANDING_MARGIN);
+        let top = self.l.top_near(p, self.r + crate::strategy::LANDING_MARGIN + 1.5 * self.l.sim.grid.res);
         let h = (z + self.l.params.approach).max(if top.is_finite() { top + self.l.params.approach } else { z });
         self.l.travel(p, h);
         self.l.push_line(MoveKind::Descend, p.extend(z), self.l.entry_feed);
@@ -902,6 +953,16 @@ impl<'a, 'b> Engine<'a, 'b> {
             }
         }
         None
+    }
+
+    fn dbg_step(&self, tag: &str, c: DVec2, n: DVec2) {
+        if std::env::var("SWARF_DEBUG_E").is_ok() && (n - c).length() > 1e-9 {
+            let u = (n - c).normalize();
+            let e = self.l.sim.front_engagement(n, self.z, u);
+            if e > self.theta + 10.0 {
+                eprintln!("hi {tag} {e:.0} at {n:.2}");
+            }
+        }
     }
 
     /// Simplifies, arc-fits and appends the pass (the material was cut step by step already).

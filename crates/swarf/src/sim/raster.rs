@@ -401,9 +401,10 @@ impl RasterSim {
     /// Cuts a horizontal step from `a` to `b` at height `z` — the inner loop of adaptive
     /// clearing. Only the new part of the sweep is visited: on each grid row, the cells of the
     /// tool disk at `b` and of the stadium's sides, minus those of the disk at `a` that the
-    /// previous step already cut.
-    pub fn cut_step(&mut self, a: DVec2, b: DVec2, z: f64) {
+    /// previous step already cut. Returns how many cells it lowered.
+    pub fn cut_step(&mut self, a: DVec2, b: DVec2, z: f64) -> usize {
         let r = self.r;
+        let mut count = 0;
         let res = self.grid.res;
         let zf = z as f32;
         let lo_y = a.y.min(b.y) - r;
@@ -471,11 +472,13 @@ impl RasterSim {
                     let t = ((q - a).dot(ab) * inv).clamp(0.0, 1.0);
                     if (a + ab * t - q).length_squared() <= r * r {
                         self.lower(k, zf);
+                        count += 1;
                     }
                 }
                 i += 1;
             }
         }
+        count
     }
 
     /// Fills `out[i]` with whether material stands more than `eps` above `z` at `c + ring[i]`
