@@ -93,6 +93,9 @@ pub fn link_adaptive(
             continue;
         }
         let extra = crate::strategy::cleanup::passes_for_leftover(&geom, params, &left);
+        if std::env::var("SWARF_DEBUG").is_ok() {
+            eprintln!("leftover at z {z}: {:.2} mm2, {} clean-up passes", left.area(), extra.len());
+        }
         if extra.is_empty() {
             continue;
         }

@@ -62,7 +62,16 @@ pub fn passes_for_leftover(g: &LayerGeom, params: &Params, left: &Area) -> Vec<P
     if left.is_empty() {
         return Vec::new();
     }
-    level_curves(g, params, &left, g.step / 4.0)
+    let mut out = level_curves(g, params, &left, g.step / 4.0);
+    // the wall contour itself, last: what is left against the walls
+    if !g.keep.is_empty() {
+        // (the wall contour is the edge of the centres' region: clip by the leftover's reach
+        // only, or the clipper may drop the contour as outside)
+        let zone = left.offset(g.r + 0.01, REGION_TOL);
+        let wall = g.keep.offset(g.wall_level, REGION_TOL);
+        out.extend(super::offset::ring_passes(&wall, g.wall_level, &zone, params, true, PassKind::Cleanup));
+    }
+    out
 }
 
 /// Level curves of the wall distance (or of the stock outline without walls) at spacing
