@@ -63,8 +63,9 @@ enum UnitsArg {
 
 #[derive(Args, Clone)]
 struct CommonOpts {
-    /// Clearing strategy.
-    #[arg(long, value_enum, default_value = "offset")]
+    /// Clearing strategy: adaptive (engagement held near the reference, paper 1), offset
+    /// (contour-parallel) or zigzag.
+    #[arg(long, value_enum, default_value = "adaptive")]
     strategy: StrategyArg,
     /// Tool diameter, mm (overrides the input).
     #[arg(long, value_name = "MM", allow_negative_numbers = true)]
@@ -108,6 +109,10 @@ struct CommonOpts {
     /// Ramp and helix angle, degrees.
     #[arg(long, value_name = "DEG", default_value_t = 3.0, allow_negative_numbers = true)]
     ramp_angle: f64,
+    /// Adaptive: engagement above the reference that wall-following may reach before the tool
+    /// turns back to constant engagement (paper 1 §4.4), degrees.
+    #[arg(long, value_name = "DEG", default_value_t = 20.0, allow_negative_numbers = true)]
+    overshoot: f64,
     /// Arc-fitting tolerance, mm.
     #[arg(long, value_name = "MM", default_value_t = 0.002, allow_negative_numbers = true)]
     arc_tolerance: f64,
@@ -245,6 +250,7 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
         stock_to_leave: o.stock_to_leave,
         finish: o.finish,
         ramp_angle_deg: o.ramp_angle,
+        overshoot_deg: o.overshoot,
         arc_tol: o.arc_tolerance,
         clearance: o.clearance,
         ..Default::default()

@@ -157,7 +157,7 @@ fn plan(c: &mut Criterion) {
     let job = case();
     let mut g = c.benchmark_group("plan");
     g.sample_size(10).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(12));
-    for s in [StrategyKind::Offset, StrategyKind::Zigzag] {
+    for s in [StrategyKind::Adaptive, StrategyKind::Offset, StrategyKind::Zigzag] {
         let opts = options(s, false);
         let out = rough(&job, &opts, &mut |_, _| {}).expect("rough");
         eprintln!("plan/{}: {} moves, compute {:.3} s", s.name(), out.toolpath.moves.len(), out.report.compute_s);

@@ -62,6 +62,9 @@ pub enum Stage {
 
 /// Checks the parameters a user can set.
 pub fn validate_params(p: &Params) -> Result<()> {
+    if !(p.overshoot_deg >= 0.0 && p.overshoot_deg <= 90.0) {
+        return Err(Error::param("--overshoot", format!("{}°: must be in [0°, 90°]", p.overshoot_deg)));
+    }
     if !(p.ramp_angle_deg > 0.0 && p.ramp_angle_deg <= 45.0) {
         return Err(Error::param("--ramp-angle", format!("{}°: must be in (0°, 45°]", p.ramp_angle_deg)));
     }

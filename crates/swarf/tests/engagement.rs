@@ -483,7 +483,11 @@ fn pixel_follows_exact_on_a_real_program() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/cases/pocket_islands.json");
     let text = std::fs::read(path).expect("examples/cases/pocket_islands.json");
     let job = swarf::io::case::parse_case(std::path::Path::new(path), &text).expect("case");
-    let out = rough(&job, &RoughOptions::default(), &mut |_, _| {}).expect("rough");
+    let opts = RoughOptions {
+        params: swarf::strategy::Params { strategy: swarf::strategy::StrategyKind::Offset, ..Default::default() },
+        ..Default::default()
+    };
+    let out = rough(&job, &opts, &mut |_, _| {}).expect("rough");
     let rep = &out.report;
     let (e, p) = (rep.engagement_deg, rep.engagement_pixel_deg);
     eprintln!(

@@ -250,21 +250,32 @@ fn finish(seed: u64, what: String, json: String, params: Params, d: f64) -> Case
 /// islands (circles, rectangles, convex polygons) that keep 1.5·D + 2 mm from the walls and from
 /// each other, so that the tool passes everywhere with room for a helix.
 fn pocket_case(seed: u64, strategy: StrategyKind) -> Case {
+    pocket_case_scaled(seed, strategy, 1.0)
+}
+
+/// A pocket of [`pocket_case`] at half the size (the same tools): 20–60 mm pockets with 3–12 mm
+/// tools, so that 200 adaptive jobs, simulated finely enough for engagement percentiles, fit in
+/// the test budget.
+fn small_pocket_case(seed: u64, strategy: StrategyKind) -> Case {
+    pocket_case_scaled(seed, strategy, 0.5)
+}
+
+fn pocket_case_scaled(seed: u64, strategy: StrategyKind, k: f64) -> Case {
     let mut rng = Rng::new(seed);
     let d = (rng.range(3.0, 12.0) * 1000.0).round() / 1000.0;
     let angle = if rng.chance(0.5) { 0.0 } else { rng.range(0.0, std::f64::consts::FRAC_PI_2) };
     let (shape, pocket) = match rng.int(0, 2) {
         0 => {
-            let (w, h) = (rng.range(40.0, 120.0), rng.range(40.0, 120.0));
+            let (w, h) = (k * rng.range(40.0, 120.0), k * rng.range(40.0, 120.0));
             let rc = if rng.chance(0.3) { 0.0 } else { rng.range(0.0, 0.25 * w.min(h)) };
             (format!("rounded rectangle {w:.1}x{h:.1} r {rc:.1}"), rounded_rect_ring(DVec2::ZERO, w, h, rc, angle))
         }
         1 => {
-            let (w, h) = (rng.range(50.0, 120.0), rng.range(50.0, 120.0));
+            let (w, h) = (k * rng.range(50.0, 120.0), k * rng.range(50.0, 120.0));
             (format!("notched rectangle {w:.1}x{h:.1}"), notched_ring(&mut rng, DVec2::ZERO, w, h, angle))
         }
         _ => {
-            let rmax = rng.range(20.0, 60.0);
+            let rmax = k * rng.range(20.0, 60.0);
             let n = rng.int(5, 10);
             (format!("star polygon n {n} r {rmax:.1}"), star_ring(&mut rng, DVec2::ZERO, n, 0.65 * rmax, rmax))
         }
@@ -279,11 +290,11 @@ fn pocket_case(seed: u64, strategy: StrategyKind) -> Case {
             let c = DVec2::new(rng.range(lo.x, hi.x), rng.range(lo.y, hi.y));
             let (ring, rad, kind) = match rng.int(0, 2) {
                 0 => {
-                    let r = rng.range(3.0, 12.0);
+                    let r = k * rng.range(3.0, 12.0);
                     (circle_ring(c, r), r / (std::f64::consts::PI / 48.0).cos(), "circle")
                 }
                 1 => {
-                    let (w, h) = (rng.range(5.0, 25.0), rng.range(5.0, 25.0));
+                    let (w, h) = (k * rng.range(5.0, 25.0), k * rng.range(5.0, 25.0));
                     (
                         rect_ring(c, w, h, rng.range(0.0, std::f64::consts::PI)),
                         0.5 * (w * w + h * h).sqrt(),
@@ -291,7 +302,7 @@ fn pocket_case(seed: u64, strategy: StrategyKind) -> Case {
                     )
                 }
                 _ => {
-                    let r = rng.range(4.0, 12.0);
+                    let r = k * rng.range(4.0, 12.0);
                     let n = rng.int(3, 7);
                     (convex_ring(&mut rng, c, n, r), r, "convex polygon")
                 }
@@ -390,25 +401,35 @@ fn flags(p: &Params, res: f64) -> String {
     if !p.climb {
         s.push_str(" --conventional");
     }
-    if p.strategy == StrategyKind::Offset {
-        s.push_str(match p.offset_order {
+    match p.strategy {
+        StrategyKind::Offset => s.push_str(match p.offset_order {
             OffsetOrder::InsideOut => " --order inside-out",
             OffsetOrder::OutsideIn => " --order outside-in",
-        });
-    } else {
-        write!(s, " --angle {}", p.zigzag_angle_deg).unwrap();
+        }),
+        StrategyKind::Zigzag => write!(s, " --angle {}", p.zigzag_angle_deg).unwrap(),
+        StrategyKind::Adaptive => {}
     }
     write!(s, " --res {res}").unwrap();
     s
 }
 
+/// Marks a problem with the engagement bound (as opposed to gouges, collisions, rest, plunges).
+const BOUND: &str = "bound: ";
+
+// (the negated comparisons make NaN fail)
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 /// Roughs one case and returns its problems (empty when it passes) and a one-line summary.
 fn run(case: &Case) -> (Vec<String>, String) {
     let opts = RoughOptions {
         params: case.params.clone(),
         // engagement samples every 0.5 mm: the figures checked here (gouges, collisions, rest,
         // plunges) do not depend on them, and the default (res / 2) triples the time
-        sim: SimOptions { res: Some(case.res), sample_step: Some(0.5), ..Default::default() },
+        // (adaptive: every 0.1 mm, since its engagement percentiles are checked)
+        sim: SimOptions {
+            res: Some(case.res),
+            sample_step: Some(if case.params.strategy == StrategyKind::Adaptive { 0.1 } else { 0.5 }),
+            ..Default::default()
+        },
         simulate: true,
         input_name: format!("prop_{}", case.seed),
         ..Default::default()
@@ -436,6 +457,23 @@ fn run(case: &Case) -> (Vec<String>, String) {
     let room = room_for_helix(case);
     if room && r.plunges != 0 {
         problems.push(format!("{} plunges although the pocket has room for a helix", r.plunges));
+    }
+    // the adaptive strategy's stated bound, outside the entry bores: p99 within the reference
+    // + 10°, and under 0.5 % of the cutting time above the reference + 20°
+    if case.params.strategy == StrategyKind::Adaptive {
+        let e = &r.engagement_deg;
+        if !(e.p99 <= r.engagement_ref_deg + 10.0) {
+            problems.push(format!(
+                "{BOUND}engagement p99 {:.1}° above the reference {:.1}° + 10°",
+                e.p99, r.engagement_ref_deg
+            ));
+        }
+        if !(r.above_ref_plus_20.time_fraction < 0.005) {
+            problems.push(format!(
+                "{BOUND}{:.2} % of the cutting time above the reference + 20°",
+                100.0 * r.above_ref_plus_20.time_fraction
+            ));
+        }
     }
     if !problems.is_empty()
         && let Some(rp) = &out.replay
@@ -475,17 +513,33 @@ fn run(case: &Case) -> (Vec<String>, String) {
 ///
 /// `PROP_SEEDS=2001,2002` runs only those seeds (of the groups that hold them).
 fn run_all(name: &str, seeds: std::ops::Range<u64>, make: fn(u64, StrategyKind) -> Case, strategy: StrategyKind) {
+    run_all_bounded(name, seeds, make, strategy, 0)
+}
+
+/// [`run_all`], with at most `bound_max` jobs allowed over the engagement bound (the adaptive
+/// strategy's; every job must still be clean).
+fn run_all_bounded(
+    name: &str,
+    seeds: std::ops::Range<u64>,
+    make: fn(u64, StrategyKind) -> Case,
+    strategy: StrategyKind,
+    bound_max: usize,
+) {
     let only: Option<Vec<u64>> =
         std::env::var("PROP_SEEDS").ok().map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect());
     let t = Instant::now();
     let mut failures = Vec::new();
+    let mut over_bound = Vec::new();
     let mut n = 0;
     for seed in seeds.filter(|s| only.as_ref().is_none_or(|o| o.contains(s))) {
         let case = make(seed, strategy);
         let (problems, summary) = run(&case);
         eprintln!("{name}: {summary}");
         n += 1;
-        if !problems.is_empty() {
+        let clean = problems.iter().all(|x| x.starts_with(BOUND) || x.starts_with("  "));
+        if !problems.is_empty() && clean {
+            over_bound.push(format!("seed {}: {}", case.seed, problems.join("; ")));
+        } else if !problems.is_empty() {
             failures.push(format!(
                 "seed {} ({}), flags {}:\n  {}\n  reproduce: PROP_SEEDS={} cargo test -p swarf --test property\n  case JSON: {}",
                 case.seed,
@@ -497,8 +551,19 @@ fn run_all(name: &str, seeds: std::ops::Range<u64>, make: fn(u64, StrategyKind) 
             ));
         }
     }
-    eprintln!("{name}: {n} jobs in {:.1} s, {} failed", t.elapsed().as_secs_f64(), failures.len());
+    eprintln!(
+        "{name}: {n} jobs in {:.1} s, {} failed, {} over the engagement bound",
+        t.elapsed().as_secs_f64(),
+        failures.len(),
+        over_bound.len()
+    );
     assert!(n > 0 || only.is_some(), "no jobs ran");
+    assert!(
+        over_bound.len() <= bound_max,
+        "{name}: {} of {n} jobs over the engagement bound (ceiling {bound_max}):\n{}",
+        over_bound.len(),
+        over_bound.join("\n")
+    );
     assert!(failures.is_empty(), "{name}: {} of {n} jobs failed:\n{}", failures.len(), failures.join("\n\n"));
 }
 
@@ -518,6 +583,92 @@ fn random_pockets_zigzag() {
 #[test]
 fn random_open_jobs_offset() {
     run_all("open/offset", 5000..5012, open_case, StrategyKind::Offset);
+}
+
+// Adaptive: 200 closed pockets with islands (seeds 3000..3200), run on every core.
+//
+// Every job must be clean (no gouge, collision or plunge, rest under 0.5 %). The engagement
+// bound (p99 within the reference + 10°, under 0.5 % of the time above the reference + 20°)
+// holds on most of them; the pockets where it does not today are small ones, one to four tool
+// diameters across, where the entry bore and the first loops fill most of the pocket. Their
+// number is held to a ceiling so that it can only go down (issue 3 stays open until it is 0).
+const ADAPTIVE_BOUND_FAILURES_MAX: usize = 10;
+
+#[test]
+fn random_pockets_adaptive() {
+    let only: Option<Vec<u64>> =
+        std::env::var("PROP_SEEDS").ok().map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect());
+    let seeds: Vec<u64> = (3000..3200).filter(|s| only.as_ref().is_none_or(|o| o.contains(s))).collect();
+    let threads = std::thread::available_parallelism().map_or(2, |n| n.get()).max(1);
+    let t = Instant::now();
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let results = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|sc| {
+        for _ in 0..threads {
+            sc.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(&seed) = seeds.get(i) else { break };
+                    let case = small_pocket_case(seed, StrategyKind::Adaptive);
+                    let (problems, summary) = run(&case);
+                    eprintln!("pockets/adaptive: {summary}");
+                    results.lock().unwrap().push((case, problems));
+                }
+            });
+        }
+    });
+    let mut results = results.into_inner().unwrap();
+    results.sort_by_key(|(c, _)| c.seed);
+    let describe = |c: &Case, p: &[String]| {
+        format!(
+            "seed {} ({}), flags {}:\n  {}\n  reproduce: PROP_SEEDS={} cargo test -p swarf --test property\n  case JSON: {}",
+            c.seed,
+            c.what,
+            flags(&c.params, c.res),
+            p.join("\n  "),
+            c.seed,
+            c.json
+        )
+    };
+    let dirty: Vec<String> = results
+        .iter()
+        .filter(|(_, p)| p.iter().any(|x| !x.starts_with(BOUND) && !x.starts_with("  ")))
+        .map(|(c, p)| describe(c, p))
+        .collect();
+    let bound: Vec<String> = results
+        .iter()
+        .filter(|(_, p)| p.iter().any(|x| x.starts_with(BOUND)))
+        .map(|(c, p)| format!("seed {}: {}", c.seed, p.join("; ")))
+        .collect();
+    eprintln!(
+        "pockets/adaptive: {} jobs in {:.1} s, {} not clean, {} over the engagement bound:\n{}",
+        results.len(),
+        t.elapsed().as_secs_f64(),
+        dirty.len(),
+        bound.len(),
+        bound.join("\n")
+    );
+    assert!(!results.is_empty() || only.is_some(), "no jobs ran");
+    assert!(
+        dirty.is_empty(),
+        "{} of {} adaptive jobs are not clean:\n{}",
+        dirty.len(),
+        results.len(),
+        dirty.join("\n\n")
+    );
+    assert!(
+        bound.len() <= ADAPTIVE_BOUND_FAILURES_MAX,
+        "{} of {} adaptive jobs exceed the engagement bound (ceiling {ADAPTIVE_BOUND_FAILURES_MAX}):\n{}",
+        bound.len(),
+        results.len(),
+        bound.join("\n")
+    );
+}
+
+#[test]
+fn random_open_jobs_adaptive() {
+    // (one of the 16 is over the bound today: seed 7008, a Ø12 tool in a star-shaped part)
+    run_all_bounded("open/adaptive", 7000..7016, open_case, StrategyKind::Adaptive, 1);
 }
 
 #[test]

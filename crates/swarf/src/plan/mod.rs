@@ -114,6 +114,12 @@ pub(crate) struct Linker<'a> {
     step: f64,
     /// Moves pushed now were already cut into the model (adaptive passes).
     precut: bool,
+    /// Extra radius for the clearance tests of links and lifted rapids, mm. The model cuts
+    /// cells by their centres, so a cell counted as cut can still hold material up to half a
+    /// cell from its centre; a strategy whose passes end anywhere in the material (adaptive)
+    /// tests three quarters of a cell further (a half-cut cell holds material up to 0.71 cell
+    /// from its centre).
+    clear_margin: f64,
 }
 
 impl<'a> Linker<'a> {
@@ -135,6 +141,7 @@ impl<'a> Linker<'a> {
             down_at: None,
             step: job.stepover_mm(),
             precut: false,
+            clear_margin: 0.0,
         })
     }
 
@@ -194,7 +201,7 @@ impl<'a> Linker<'a> {
             return false;
         }
         let m = a + (b - a) * ((len - keep_out) / len);
-        self.sim.is_clear(&Path::Line { a: a.extend(z), b: m.extend(z) }, 0.0)
+        self.sim.is_clear(&Path::Line { a: a.extend(z), b: m.extend(z) }, self.clear_margin)
     }
 
     /// Highest material within `rho` of the point (−∞ when none).
@@ -218,8 +225,8 @@ impl<'a> Linker<'a> {
             self.push_line(MoveKind::Rapid, cur.truncate().extend(z), 0.0);
         }
         let across = Path::Line { a: cur.truncate().extend(z), b: target.extend(z) };
-        let ok =
-            z >= self.safe_z - 1e-9 || (self.sim.is_clear(&across, 0.5) && self.keep_safe(cur.truncate(), target, z));
+        let ok = z >= self.safe_z - 1e-9
+            || (self.sim.is_clear(&across, 0.5 + self.clear_margin) && self.keep_safe(cur.truncate(), target, z));
         if ok {
             self.push_line(MoveKind::Rapid, target.extend(z), 0.0);
         } else {
@@ -269,7 +276,7 @@ impl<'a> Linker<'a> {
                 arrived = true;
             } else if self.keep_safe(cur.truncate(), start, z) {
                 let link = Path::Line { a: cur, b: start.extend(z) };
-                if self.sim.is_clear(&link, 0.0) {
+                if self.sim.is_clear(&link, self.clear_margin) {
                     if len > 2.0 * self.job.tool.diameter {
                         let lift = (z + 0.5).min(self.safe_z);
                         self.push_line(MoveKind::Rapid, cur.truncate().extend(lift), 0.0);
@@ -527,7 +534,7 @@ impl<'a> Linker<'a> {
     fn lift_across(&mut self, a: DVec2, b: DVec2, z: f64) -> bool {
         let lift = (z + 0.5).min(self.safe_z);
         let across = Path::Line { a: a.extend(lift), b: b.extend(lift) };
-        if !(self.sim.is_clear(&across, 0.0) && self.keep_safe(a, b, lift)) {
+        if !(self.sim.is_clear(&across, self.clear_margin) && self.keep_safe(a, b, lift)) {
             return false;
         }
         self.push_line(MoveKind::Rapid, a.extend(lift), 0.0);

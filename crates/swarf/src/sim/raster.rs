@@ -168,6 +168,9 @@ pub struct RasterSim {
     /// Level whose reachable material is counted in `reach_left` (see [`Self::begin_level`]).
     level_thr: f32,
     reach_left: usize,
+    /// Cells (i0, i1, j0, j1) whose material at the level was cleared since the last
+    /// [`RasterSim::take_dirty`].
+    dirty: Option<(usize, usize, usize, usize)>,
 }
 
 impl RasterSim {
@@ -268,6 +271,7 @@ impl RasterSim {
             track_exact: true,
             level_thr: f32::INFINITY,
             reach_left: 0,
+            dirty: None,
         })
     }
 
@@ -373,17 +377,31 @@ impl RasterSim {
     fn lower(&mut self, k: usize, z: f32) {
         let h = self.s[k];
         if z < h {
-            if h > self.level_thr && z <= self.level_thr && self.reach[k] {
-                self.reach_left -= 1;
+            if h > self.level_thr && z <= self.level_thr {
+                if self.reach[k] {
+                    self.reach_left -= 1;
+                }
+                let (i, j) = (k % self.grid.nx, k / self.grid.nx);
+                self.dirty = Some(match self.dirty {
+                    None => (i, i, j, j),
+                    Some((i0, i1, j0, j1)) => (i0.min(i), i1.max(i), j0.min(j), j1.max(j)),
+                });
             }
             self.s[k] = z;
         }
+    }
+
+    /// The box of cells (i0, i1, j0, j1) whose material at the level was cleared since the last
+    /// call (or since [`RasterSim::begin_level`]), and forgets it.
+    pub fn take_dirty(&mut self) -> Option<(usize, usize, usize, usize)> {
+        self.dirty.take()
     }
 
     /// Starts counting the reachable material that stands above `z` (plus `eps`): the cells the
     /// tool can reach at this level and must still clear.
     pub fn begin_level(&mut self, z: f64) {
         self.level_thr = (z + self.eps) as f32;
+        self.dirty = None;
         let thr = self.level_thr;
         self.reach_left = self.s.iter().zip(&self.reach).filter(|(h, r)| **r && **h > thr).count();
     }
@@ -813,7 +831,12 @@ impl RasterSim {
                     }
                     let x0 = self.grid.x0 + start as f64 * res;
                     let x1 = self.grid.x0 + i as f64 * res;
-                    rings.push(vec![DVec2::new(x0, y0), DVec2::new(x1, y0), DVec2::new(x1, y0 + res), DVec2::new(x0, y0 + res)]);
+                    rings.push(vec![
+                        DVec2::new(x0, y0),
+                        DVec2::new(x1, y0),
+                        DVec2::new(x1, y0 + res),
+                        DVec2::new(x0, y0 + res),
+                    ]);
                 } else {
                     i += 1;
                 }

@@ -111,7 +111,7 @@ pub struct Params {
 impl Default for Params {
     fn default() -> Self {
         Self {
-            strategy: StrategyKind::Offset,
+            strategy: StrategyKind::Adaptive,
             climb: true,
             offset_order: OffsetOrder::InsideOut,
             zigzag_angle_deg: 0.0,
