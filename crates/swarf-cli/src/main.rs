@@ -113,6 +113,10 @@ struct CommonOpts {
     /// turns back to constant engagement (paper 1 §4.4), degrees.
     #[arg(long, value_name = "DEG", default_value_t = 20.0, allow_negative_numbers = true)]
     overshoot: f64,
+    /// Adaptive: raise the feed where the engagement is low, by up to this factor (chip-thinning
+    /// compensation 1/sin θ, smoothed over a tool diameter; paper 1 §5). 1 = off.
+    #[arg(long, value_name = "FACTOR", default_value_t = 1.0, allow_negative_numbers = true)]
+    feed_boost: f64,
     /// Arc-fitting tolerance, mm.
     #[arg(long, value_name = "MM", default_value_t = 0.002, allow_negative_numbers = true)]
     arc_tolerance: f64,
@@ -251,6 +255,7 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
         finish: o.finish,
         ramp_angle_deg: o.ramp_angle,
         overshoot_deg: o.overshoot,
+        feed_boost: o.feed_boost,
         arc_tol: o.arc_tolerance,
         clearance: o.clearance,
         ..Default::default()

@@ -291,6 +291,8 @@ fn other_bad_numbers() {
     expect_failure(&d, &c, &["--clearance=-1"], 2, &["--clearance", "positive"]);
     expect_failure(&d, &c, &["--stock-to-leave", "-0.5"], 2, &["--stock-to-leave", "positive"]);
     expect_failure(&d, &c, &["--angle", "NaN"], 2, &["--angle", "number"]);
+    expect_failure(&d, &c, &["--feed-boost", "0.5"], 2, &["--feed-boost", "[1, 3]"]);
+    expect_failure(&d, &c, &["--overshoot", "-5"], 2, &["--overshoot", "[0°, 90°]"]);
 }
 
 /// A spindle speed that is not a positive number must be refused: today `--spindle=-5`,

@@ -62,6 +62,9 @@ pub enum Stage {
 
 /// Checks the parameters a user can set.
 pub fn validate_params(p: &Params) -> Result<()> {
+    if !(p.feed_boost >= 1.0 && p.feed_boost <= 3.0) {
+        return Err(Error::param("--feed-boost", format!("{}: must be in [1, 3]", p.feed_boost)));
+    }
     if !(p.overshoot_deg >= 0.0 && p.overshoot_deg <= 90.0) {
         return Err(Error::param("--overshoot", format!("{}°: must be in [0°, 90°]", p.overshoot_deg)));
     }

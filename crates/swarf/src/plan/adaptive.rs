@@ -48,9 +48,19 @@
 //! [`crate::strategy::cleanup`] passes: level curves of the wall distance, farthest first, then
 //! the wall contour itself.
 //!
-//! Not yet done: the engagement-driven feed of §5 (the `feed_boost` parameter is not used), and
-//! the bound is not met everywhere — see `docs/RESULTS.md` for the cases and random pockets where
-//! the clean-up passes or a tight pocket still exceed it.
+//! The planner cuts its model with the radius less the largest distance between its steps and
+//! the emitted program (Douglas–Peucker, arc fitting and the post's rounding, 5 µm by default):
+//! a cell on the edge of a pass is then never counted as cut when the program leaves a sliver
+//! of it, which a later landing or rapid would hit.
+//!
+//! **Feed (§5).** With `feed_boost > 1` the feed rises where the engagement is low: the
+//! engagement of each step is read off the material it removed, the feed multiplier is
+//! `1 / sin θ` (chip thinning) up to the boost, the smallest multiplier within one tool diameter
+//! along the pass is taken (so the feed is back down before the engagement rises) and rounded
+//! down to a tenth; links through cleared space run at the boosted feed.
+//!
+//! The bound is not met everywhere yet — see `docs/RESULTS.md` for the case and the random
+//! pockets where the clean-up passes or a tight pocket still exceed it.
 
 use super::Linker;
 use crate::error::Result;
@@ -267,6 +277,10 @@ enum Mode {
 struct Engine<'a, 'b> {
     l: &'b mut Linker<'a>,
     r: f64,
+    /// The radius the planner cuts its model with: `r` less the largest distance between the
+    /// planned steps and the emitted program (Douglas–Peucker, arc fitting, the post's
+    /// rounding), so that the model never counts as cut what the program leaves.
+    r_plan: f64,
     theta: f64,
     over: f64,
     climb: bool,
@@ -301,6 +315,7 @@ impl<'a, 'b> Engine<'a, 'b> {
         let ring = l.sim.ring().to_vec();
         let boost_ring = ring.iter().map(|o| *o * ((o.length() + boost) / o.length())).collect();
         Engine {
+            r_plan: r - (DP_TOL + params.arc_tol + 0.001),
             l,
             r,
             theta,
@@ -648,6 +663,8 @@ impl<'a, 'b> Engine<'a, 'b> {
         };
         self.l.down_at = Some(z);
         pts.push(c);
+        // cells removed by the step that ends at each point (for the feed of §5)
+        let mut rem: Vec<u32> = vec![0];
         let mut air = 0.0;
         // points up to the last one that removed material (the air after it is dropped)
         let mut last_cut = 1usize;
@@ -662,7 +679,8 @@ impl<'a, 'b> Engine<'a, 'b> {
                 Mode::Engage => match self.engage_step(c, alpha) {
                     EngageStep::Moved(n, a) => {
                         let left = self.l.sim.reach_left();
-                        let cut = self.l.sim.cut_step(c, n, z);
+                        let cut = self.l.sim.cut_step_r(c, n, z, self.r_plan);
+                        rem.push(cut as u32);
                         c = n;
                         alpha = a;
                         pts.push(c);
@@ -693,7 +711,9 @@ impl<'a, 'b> Engine<'a, 'b> {
                             };
                             let heavy = e > self.theta + self.switch_slack() || e_q > self.theta + STEP_SLACK_DEG;
                             if heavy && let Some((n2, a)) = self.away_step(c, alpha) {
-                                if self.l.sim.cut_step(c, n2, z) > 0 {
+                                let k = self.l.sim.cut_step_r(c, n2, z, self.r_plan);
+                                rem.push(k as u32);
+                                if k > 0 {
                                     last_cut = pts.len() + 1;
                                 }
                                 c = n2;
@@ -710,7 +730,9 @@ impl<'a, 'b> Engine<'a, 'b> {
                             if !self.segment_allowed(c, q) {
                                 break;
                             }
-                            if self.l.sim.cut_step(c, q, z) > 0 {
+                            let k = self.l.sim.cut_step_r(c, q, z, self.r_plan);
+                            rem.push(k as u32);
+                            if k > 0 {
                                 last_cut = pts.len() + 1;
                             }
                             c = q;
@@ -754,7 +776,9 @@ impl<'a, 'b> Engine<'a, 'b> {
                             EngageStep::Moved(n2, a) => {
                                 self.resume.push(Resume { ring, s, dir });
                                 mode = Mode::Engage;
-                                if self.l.sim.cut_step(c, n2, z) > 0 {
+                                let k = self.l.sim.cut_step_r(c, n2, z, self.r_plan);
+                                rem.push(k as u32);
+                                if k > 0 {
                                     last_cut = pts.len() + 1;
                                 }
                                 c = n2;
@@ -774,13 +798,16 @@ impl<'a, 'b> Engine<'a, 'b> {
                     let left = self.l.sim.reach_left();
                     // follow the contour through its own vertices (its round corners)
                     for q in corners {
-                        if self.l.sim.cut_step(c, q, z) > 0 {
+                        let k = self.l.sim.cut_step_r(c, q, z, self.r_plan);
+                        rem.push(k as u32);
+                        if k > 0 {
                             last_cut = pts.len() + 1;
                         }
                         c = q;
                         pts.push(c);
                     }
-                    let cut = self.l.sim.cut_step(c, n, z);
+                    let cut = self.l.sim.cut_step_r(c, n, z, self.r_plan);
+                    rem.push(cut as u32);
                     c = n;
                     alpha = t.y.atan2(t.x);
                     pts.push(c);
@@ -799,7 +826,9 @@ impl<'a, 'b> Engine<'a, 'b> {
             }
         }
         pts.truncate(last_cut);
-        self.emit(&pts, z);
+        rem.truncate(last_cut);
+        debug_assert_eq!(pts.len(), rem.len());
+        self.emit(&pts, &rem, z);
         pts
     }
 
@@ -840,7 +869,8 @@ impl<'a, 'b> Engine<'a, 'b> {
                     self.l.push_line(MoveKind::Rapid, p.extend(lift), 0.0);
                     self.l.push_line(MoveKind::Descend, p.extend(z), self.l.entry_feed);
                 } else {
-                    self.l.push_line(MoveKind::Link, p.extend(z), self.l.feed);
+                    // through cleared space: no engagement, the boosted feed of §5
+                    self.l.push_line(MoveKind::Link, p.extend(z), self.l.feed * self.l.params.feed_boost);
                 }
                 return;
             }
@@ -1011,16 +1041,116 @@ impl<'a, 'b> Engine<'a, 'b> {
         None
     }
 
-    /// Simplifies, arc-fits and appends the pass (the material was cut step by step already).
-    fn emit(&mut self, pts: &[DVec2], z: f64) {
+    /// Simplifies, arc-fits and appends the pass (the material was cut step by step already),
+    /// with the engagement-driven feed of §5 when it is on.
+    fn emit(&mut self, pts: &[DVec2], rem: &[u32], z: f64) {
         if pts.len() < 2 || polyline_length(pts) < 1e-6 {
             return;
         }
-        let simple = douglas_peucker(pts, DP_TOL);
         // the material model was cut step by step: do not cut it again
         self.l.precut = true;
-        self.l.fit_emit(&simple, z, MoveKind::Cut);
+        let base = self.l.feed;
+        let (res, d, boost) = (self.l.sim.grid.res, self.l.job.tool.diameter, self.l.params.feed_boost);
+        for (run, m) in feed_runs(pts, rem, res, self.r, d, boost) {
+            let simple = douglas_peucker(&run, DP_TOL);
+            self.l.fit_emit_feed(&simple, z, MoveKind::Cut, base * m);
+        }
         self.l.precut = false;
+    }
+}
+
+/// Feed multiplier for engagement `theta` (radians) with the boost limit `boost`: chip thinning
+/// — below 90° the thickest chip of a flat end mill is `f_z·sin θ` — is made up by `1 / sin θ`,
+/// up to `boost`; air gets `boost`.
+fn feed_factor(theta: f64, boost: f64) -> f64 {
+    if theta >= FRAC_PI_2 { 1.0 } else { (1.0 / theta.sin().max(1e-9)).min(boost).max(1.0) }
+}
+
+/// Splits a pass into runs of one feed multiplier (paper 1 §5: higher feed where the engagement
+/// is low, changing gradually). The engagement of each step is read off the material it
+/// removed: `cells·res² / length` is the radial depth `a` of a straight cut, `θ = acos(1 − a/R)`.
+/// The multiplier at a point is the smallest of those within one tool diameter along the pass
+/// (so the feed is back down a diameter before the engagement rises), rounded down to a tenth;
+/// `boost ≤ 1` gives one run at the programmed feed.
+fn feed_runs(pts: &[DVec2], rem: &[u32], res: f64, r: f64, d: f64, boost: f64) -> Vec<(Vec<DVec2>, f64)> {
+    if boost <= 1.0 + 1e-9 || pts.len() < 2 || rem.len() != pts.len() {
+        return vec![(pts.to_vec(), 1.0)];
+    }
+    let n = pts.len();
+    let mut s = vec![0.0; n];
+    let mut m = vec![1.0; n];
+    for i in 1..n {
+        let len = (pts[i] - pts[i - 1]).length();
+        s[i] = s[i - 1] + len;
+        let a = if len > 1e-9 { rem[i] as f64 * res * res / len } else { 0.0 };
+        let theta = (1.0 - (a / r).min(2.0)).clamp(-1.0, 1.0).acos();
+        m[i] = feed_factor(theta, boost);
+    }
+    m[0] = m[1];
+    // the smallest multiplier within ±d along the pass
+    let mut lo = 0;
+    let mut hi = 0;
+    let mut sm = vec![1.0; n];
+    for i in 0..n {
+        while s[i] - s[lo] > d {
+            lo += 1;
+        }
+        hi = hi.max(i);
+        while hi + 1 < n && s[hi + 1] - s[i] <= d {
+            hi += 1;
+        }
+        let w = m[lo..=hi].iter().copied().fold(f64::INFINITY, f64::min);
+        sm[i] = ((w * 10.0 + 1e-9).floor() / 10.0).max(1.0);
+    }
+    // a step takes the multiplier of its end point; runs of equal multipliers
+    let mut out: Vec<(Vec<DVec2>, f64)> = Vec::new();
+    for i in 1..n {
+        match out.last_mut() {
+            Some((run, f)) if *f == sm[i] => run.push(pts[i]),
+            _ => out.push((vec![pts[i - 1], pts[i]], sm[i])),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn feed_factor_makes_up_chip_thinning_within_the_boost() {
+        assert_eq!(feed_factor(FRAC_PI_2, 2.0), 1.0);
+        assert_eq!(feed_factor(2.0, 2.0), 1.0);
+        assert!((feed_factor(60f64.to_radians(), 2.0) - 1.0 / 60f64.to_radians().sin()).abs() < 1e-12);
+        assert_eq!(feed_factor(0.0, 1.6), 1.6);
+        assert_eq!(feed_factor(10f64.to_radians(), 1.6), 1.6);
+    }
+
+    #[test]
+    fn feed_runs_rise_in_air_and_come_down_a_diameter_before_the_cut() {
+        // a straight pass: 20 mm of air, then 20 mm at radial depth 1.5 mm (R 3, θ 60°)
+        let (res, r, d) = (0.05, 3.0, 6.0);
+        let step = 0.6;
+        let pts: Vec<DVec2> = (0..=66).map(|i| DVec2::new(i as f64 * step, 0.0)).collect();
+        let cells = (1.5 * step / (res * res)).round() as u32;
+        let rem: Vec<u32> = (0..pts.len()).map(|i| if i as f64 * step > 20.0 { cells } else { 0 }).collect();
+        let runs = feed_runs(&pts, &rem, res, r, d, 1.5);
+        // off: one run at the programmed feed
+        assert_eq!(feed_runs(&pts, &rem, res, r, d, 1.0).len(), 1);
+        // the air gets the full boost, the cut 1 / sin 60° = 1.15 rounded down to 1.1
+        assert_eq!(runs.first().unwrap().1, 1.5);
+        assert_eq!(runs.last().unwrap().1, 1.1);
+        // the feed is down before the cut starts: the boosted run ends a diameter before 20 mm
+        let end_fast = runs[0].0.last().unwrap().x;
+        assert!(end_fast <= 20.0 - d + step + 1e-9, "{end_fast}");
+        // the runs join end to start, in order, and cover the pass
+        for w in runs.windows(2) {
+            assert_eq!(w[0].0.last(), w[1].0.first());
+        }
+        assert_eq!(runs[0].0[0], pts[0]);
+        assert_eq!(*runs.last().unwrap().0.last().unwrap(), *pts.last().unwrap());
+        // never above the boost, never below the programmed feed
+        assert!(runs.iter().all(|(_, m)| (1.0..=1.5).contains(m)));
     }
 }
 

@@ -545,18 +545,23 @@ impl<'a> Linker<'a> {
 
     /// Arc-fits the polyline (which starts where the tool is) and appends it at `z`.
     fn fit_emit(&mut self, poly: &[DVec2], z: f64, kind: MoveKind) {
+        self.fit_emit_feed(poly, z, kind, self.feed);
+    }
+
+    /// [`Self::fit_emit`] at the given feed.
+    fn fit_emit_feed(&mut self, poly: &[DVec2], z: f64, kind: MoveKind, feed: f64) {
         for piece in arcfit::fit(poly, self.params.arc_tol) {
             match piece {
-                Piece::Line { to } => self.push_line(kind, to.extend(z), self.feed),
+                Piece::Line { to } => self.push_line(kind, to.extend(z), feed),
                 Piece::Arc { to, center, ccw } => {
                     // split arcs over a half turn so that every move is unambiguous
                     let from = self.tp.end().truncate();
                     let g = crate::toolpath::ArcGeom::new(from.extend(z), to.extend(z), center, ccw);
                     if g.sweep.abs() > std::f64::consts::PI {
                         let mid = g.at(0.5).truncate();
-                        self.push_arc(kind, mid.extend(z), center, ccw, self.feed);
+                        self.push_arc(kind, mid.extend(z), center, ccw, feed);
                     }
-                    self.push_arc(kind, to.extend(z), center, ccw, self.feed);
+                    self.push_arc(kind, to.extend(z), center, ccw, feed);
                 }
             }
         }

@@ -421,7 +421,13 @@ impl RasterSim {
     /// tool disk at `b` and of the stadium's sides, minus those of the disk at `a` that the
     /// previous step already cut. Returns how many cells it lowered.
     pub fn cut_step(&mut self, a: DVec2, b: DVec2, z: f64) -> usize {
-        let r = self.r;
+        self.cut_step_r(a, b, z, self.r)
+    }
+
+    /// [`Self::cut_step`] with the tool radius `r` (a planner that emits its path within a
+    /// tolerance cuts by the radius less that tolerance, so that it never counts as cut what the
+    /// emitted program leaves).
+    pub fn cut_step_r(&mut self, a: DVec2, b: DVec2, z: f64, r: f64) -> usize {
         let mut count = 0;
         let res = self.grid.res;
         let zf = z as f32;
