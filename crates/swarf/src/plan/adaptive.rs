@@ -106,15 +106,13 @@ pub fn link_adaptive(
     let margin = geom.wall_level - job.radius();
     let mut eng = Engine::new(&mut l, job, &geom, params, margin);
     let n = zs.len();
-    let mut passes_by_level: Vec<Vec<Vec<DVec2>>> = Vec::new();
     for (i, z) in zs.iter().enumerate() {
         eng.l.tp.note(format!("level {} of {}: z {:.3}", i + 1, n, z));
         eng.l.down_at = None;
-        passes_by_level.push(eng.level(*z));
+        eng.level(*z);
     }
     // what the constant-engagement passes left (read off the material model, level by
     // level, bottom up): clean-up passes
-    let _ = passes_by_level;
     if std::env::var("SWARF_DEBUG").is_ok() {
         eprintln!("adaptive levels done at {:.3} s", t0.elapsed().as_secs_f64());
     }
