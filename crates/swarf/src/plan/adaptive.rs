@@ -625,7 +625,6 @@ impl<'a, 'b> Engine<'a, 'b> {
     /// Brings the tool to depth as `start` says and runs the state machine; returns the pass.
     fn run(&mut self, start: Start) -> Vec<DVec2> {
         let z = self.z;
-        let mut pts: Vec<DVec2> = Vec::new();
         let (mut c, mut alpha, mut mode) = match start {
             Start::Resume { ring, s, dir, land } => {
                 let (q, t) = self.walls.at(ring, s - dir * land);
@@ -660,12 +659,8 @@ impl<'a, 'b> Engine<'a, 'b> {
             }
         };
         self.l.down_at = Some(z);
-        pts.push(c);
-        // cells removed by the step that ends at each point (for the feed of §5)
-        let mut rem: Vec<u32> = vec![0];
+        let mut tr = Trace { pts: vec![c], rem: vec![0], last_cut: 1 };
         let mut air = 0.0;
-        // points up to the last one that removed material (the air after it is dropped)
-        let mut last_cut = 1usize;
         let mut steps = 0usize;
         let max_steps = 200_000;
         loop {
@@ -677,14 +672,9 @@ impl<'a, 'b> Engine<'a, 'b> {
                 Mode::Engage => match self.engage_step(c, alpha) {
                     EngageStep::Moved(n, a) => {
                         let left = self.l.sim.reach_left();
-                        let cut = self.l.sim.cut_step_r(c, n, z, self.r_plan);
-                        rem.push(cut as u32);
+                        self.cut_to(&mut tr, n);
                         c = n;
                         alpha = a;
-                        pts.push(c);
-                        if cut > 0 {
-                            last_cut = pts.len();
-                        }
                         // circling without removing anything the tool must clear
                         air = if self.l.sim.reach_left() == left { air + self.step } else { 0.0 };
                         if air > TAU * self.r {
@@ -709,14 +699,9 @@ impl<'a, 'b> Engine<'a, 'b> {
                             };
                             let heavy = e > self.theta + self.switch_slack() || e_q > self.theta + STEP_SLACK_DEG;
                             if heavy && let Some((n2, a)) = self.away_step(c, alpha) {
-                                let k = self.l.sim.cut_step_r(c, n2, z, self.r_plan);
-                                rem.push(k as u32);
-                                if k > 0 {
-                                    last_cut = pts.len() + 1;
-                                }
+                                self.cut_to(&mut tr, n2);
                                 c = n2;
                                 alpha = a;
-                                pts.push(c);
                                 continue;
                             }
                             if e_q > self.theta + CONTOUR_SLACK_DEG + 5.0 {
@@ -728,13 +713,8 @@ impl<'a, 'b> Engine<'a, 'b> {
                             if !self.segment_allowed(c, q) {
                                 break;
                             }
-                            let k = self.l.sim.cut_step_r(c, q, z, self.r_plan);
-                            rem.push(k as u32);
-                            if k > 0 {
-                                last_cut = pts.len() + 1;
-                            }
+                            self.cut_to(&mut tr, q);
                             c = q;
-                            pts.push(c);
                         }
                         air = 0.0;
                         let (_, t) = self.walls.at(ring, s);
@@ -774,14 +754,9 @@ impl<'a, 'b> Engine<'a, 'b> {
                             EngageStep::Moved(n2, a) => {
                                 self.resume.push(Resume { ring, s, dir });
                                 mode = Mode::Engage;
-                                let k = self.l.sim.cut_step_r(c, n2, z, self.r_plan);
-                                rem.push(k as u32);
-                                if k > 0 {
-                                    last_cut = pts.len() + 1;
-                                }
+                                self.cut_to(&mut tr, n2);
                                 c = n2;
                                 alpha = a;
-                                pts.push(c);
                                 continue;
                             }
                             // the material turns into the wall: keep to the wall while the
@@ -796,22 +771,11 @@ impl<'a, 'b> Engine<'a, 'b> {
                     let left = self.l.sim.reach_left();
                     // follow the contour through its own vertices (its round corners)
                     for q in corners {
-                        let k = self.l.sim.cut_step_r(c, q, z, self.r_plan);
-                        rem.push(k as u32);
-                        if k > 0 {
-                            last_cut = pts.len() + 1;
-                        }
-                        c = q;
-                        pts.push(c);
+                        self.cut_to(&mut tr, q);
                     }
-                    let cut = self.l.sim.cut_step_r(c, n, z, self.r_plan);
-                    rem.push(cut as u32);
+                    self.cut_to(&mut tr, n);
                     c = n;
                     alpha = t.y.atan2(t.x);
-                    pts.push(c);
-                    if cut > 0 {
-                        last_cut = pts.len();
-                    }
                     // air: nothing the tool must clear was removed by this step
                     air = if self.l.sim.reach_left() == left { air + self.step } else { 0.0 };
                     let walked = walked + self.step;
@@ -823,11 +787,21 @@ impl<'a, 'b> Engine<'a, 'b> {
                 }
             }
         }
-        pts.truncate(last_cut);
-        rem.truncate(last_cut);
-        debug_assert_eq!(pts.len(), rem.len());
-        self.emit(&pts, &rem, z);
-        pts
+        tr.pts.truncate(tr.last_cut);
+        tr.rem.truncate(tr.last_cut);
+        self.emit(&tr.pts, &tr.rem, z);
+        tr.pts
+    }
+
+    /// Cuts the model from the end of the pass to `to` and appends `to` to the pass.
+    fn cut_to(&mut self, tr: &mut Trace, to: DVec2) {
+        let from = *tr.pts.last().expect("a pass starts with its landing point");
+        let k = self.l.sim.cut_step_r(from, to, self.z, self.r_plan);
+        tr.pts.push(to);
+        tr.rem.push(k as u32);
+        if k > 0 {
+            tr.last_cut = tr.pts.len();
+        }
     }
 
     /// Which way to follow the contour with tangent `t` at `c`: the way that has the material
@@ -1150,6 +1124,14 @@ mod tests {
         // never above the boost, never below the programmed feed
         assert!(runs.iter().all(|(_, m)| (1.0..=1.5).contains(m)));
     }
+}
+
+/// A pass as it is planned: its points, the cells each step removed (for the feed of §5), and
+/// how many points reach the last step that removed material (the air after it is dropped).
+struct Trace {
+    pts: Vec<DVec2>,
+    rem: Vec<u32>,
+    last_cut: usize,
 }
 
 /// Outcome of one constant-engagement step.
