@@ -68,8 +68,7 @@ pub fn passes_for_leftover(g: &LayerGeom, params: &Params, left: &Area) -> Vec<P
         // (the wall contour is the edge of the centres' region: clip by the leftover's reach
         // only, or the clipper may drop the contour as outside)
         let zone = left.offset(g.r + 0.01, REGION_TOL);
-        let wall = g.keep.offset(g.wall_level, REGION_TOL);
-        out.extend(super::offset::ring_passes(&wall, g.wall_level, &zone, params, true, PassKind::Cleanup));
+        out.extend(super::offset::level_passes(&g.keep, g.wall_level, &zone, params, true, PassKind::Cleanup));
     }
     out
 }
