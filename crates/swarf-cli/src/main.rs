@@ -117,6 +117,10 @@ struct CommonOpts {
     /// compensation 1/sin θ, smoothed over a tool diameter; paper 1 §5). 1 = off.
     #[arg(long, value_name = "FACTOR", default_value_t = 1.0, allow_negative_numbers = true)]
     feed_boost: f64,
+    /// Links through cleared space as feed moves (G1 at the cutting feed times the feed boost)
+    /// instead of rapids at depth: for controls whose G0 is not a straight line.
+    #[arg(long)]
+    feed_links: bool,
     /// Arc-fitting tolerance, mm.
     #[arg(long, value_name = "MM", default_value_t = 0.002, allow_negative_numbers = true)]
     arc_tolerance: f64,
@@ -256,6 +260,7 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
         ramp_angle_deg: o.ramp_angle,
         overshoot_deg: o.overshoot,
         feed_boost: o.feed_boost,
+        feed_links: o.feed_links,
         arc_tol: o.arc_tolerance,
         clearance: o.clearance,
         ..Default::default()

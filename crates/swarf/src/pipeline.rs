@@ -119,7 +119,7 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
     };
     progress(Stage::Plan, 0.5);
     let mut toolpath = if opts.params.strategy == strategy::StrategyKind::Adaptive {
-        plan::adaptive::link_adaptive(job, &regions, &opts.params, &zs, &finish, &opts.sim)?
+        plan::adaptive::link_adaptive(job, &regions, &geom, &opts.params, &zs, &finish, &opts.sim)?
     } else {
         plan::link(job, &regions, &opts.params, &levels, &finish, &opts.sim)?
     };

@@ -509,6 +509,14 @@ fn run(case: &Case) -> (Vec<String>, String) {
     (problems, summary)
 }
 
+/// `PROP_DUMP=DIR` writes each case's JSON to `DIR/prop_SEED.json` (to run it with the CLI).
+fn dump(case: &Case) {
+    if let Ok(dir) = std::env::var("PROP_DUMP") {
+        let path = std::path::Path::new(&dir).join(format!("prop_{}.json", case.seed));
+        std::fs::write(&path, &case.json).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    }
+}
+
 /// Runs the cases of `seeds` and fails with every failing case described in full.
 ///
 /// `PROP_SEEDS=2001,2002` runs only those seeds (of the groups that hold them).
@@ -533,6 +541,7 @@ fn run_all_bounded(
     let mut n = 0;
     for seed in seeds.filter(|s| only.as_ref().is_none_or(|o| o.contains(s))) {
         let case = make(seed, strategy);
+        dump(&case);
         let (problems, summary) = run(&case);
         eprintln!("{name}: {summary}");
         n += 1;
@@ -589,10 +598,10 @@ fn random_open_jobs_offset() {
 //
 // Every job must be clean (no gouge, collision or plunge, rest under 0.5 %). The engagement
 // bound (p99 within the reference + 10°, under 0.5 % of the time above the reference + 20°)
-// holds on most of them (189 of 200 today); the others are mostly small pockets, a few tool
+// holds on most of them (194 of 200 today); the others are mostly small pockets, a few tool
 // diameters across, at a high reference. Their number is held to a ceiling so that it can only
 // go down (issue 3 stays open until it is 0).
-const ADAPTIVE_BOUND_FAILURES_MAX: usize = 11;
+const ADAPTIVE_BOUND_FAILURES_MAX: usize = 6;
 
 #[test]
 fn random_pockets_adaptive() {
@@ -610,6 +619,7 @@ fn random_pockets_adaptive() {
                     let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     let Some(&seed) = seeds.get(i) else { break };
                     let case = small_pocket_case(seed, StrategyKind::Adaptive);
+                    dump(&case);
                     let (problems, summary) = run(&case);
                     eprintln!("pockets/adaptive: {summary}");
                     results.lock().unwrap().push((case, problems));

@@ -93,18 +93,18 @@ const SIDE_SKIP: f64 = 15.0;
 pub fn link_adaptive(
     job: &Job,
     regions: &Regions,
+    geom: &LayerGeom,
     params: &Params,
     zs: &[f64],
     finish: &[(f64, Vec<Pass>)],
     sim_opts: &SimOptions,
 ) -> Result<Toolpath> {
     let t0 = std::time::Instant::now();
-    let geom = LayerGeom::new(job, regions, params)?;
     let first = geom.centres.bounds().map_or(DVec2::ZERO, |(lo, _)| lo);
     let mut l = Linker::new(job, regions, params, sim_opts, first)?;
     l.clear_margin = 0.75 * l.sim.grid.res;
     let margin = geom.wall_level - job.radius();
-    let mut eng = Engine::new(&mut l, job, &geom, params, margin);
+    let mut eng = Engine::new(&mut l, job, geom, params, margin);
     let n = zs.len();
     for (i, z) in zs.iter().enumerate() {
         eng.l.tp.note(format!("level {} of {}: z {:.3}", i + 1, n, z));
@@ -121,7 +121,7 @@ pub fn link_adaptive(
         if left.is_empty() {
             continue;
         }
-        let extra = crate::strategy::cleanup::passes_for_leftover(&geom, params, &left);
+        let extra = crate::strategy::cleanup::passes_for_leftover(geom, params, &left);
         if std::env::var("SWARF_DEBUG").is_ok() {
             eprintln!("leftover at z {z}: {:.2} mm2, {} clean-up passes", left.area(), extra.len());
         }
@@ -553,6 +553,11 @@ impl<'a, 'b> Engine<'a, 'b> {
             }
             // direction to the material: the engaged samples of the enlarged rings
             let Some(dir) = self.toward_material(p) else { continue };
+            // back up along the front, against the heading the pass will take, when a wall is
+            // within reach that way: the pass then sweeps the whole front from that wall
+            // instead of a step's worth of it (in a slot, the loops of trochoidal milling)
+            let cand = p;
+            let p = self.upstream(p, dir, cell);
             // slide toward the material until just before the tool touches it
             let u = DVec2::new(dir.cos(), dir.sin());
             // (by bisection to a cell: the clearance test reads a whole disk of cells)
@@ -573,9 +578,59 @@ impl<'a, 'b> Engine<'a, 'b> {
                     }
                 }
             }
-            return Some((p + u * lo, p, dir));
+            return Some((p + u * lo, cand, dir));
         }
         None
+    }
+
+    /// A lateral start `p` (material toward `dir`) moved back along the front, against the
+    /// heading the pass will take, as long as it stays clear, allowed and beside the material —
+    /// but only when that ends at a wall within a tool diameter; otherwise `p` itself.
+    fn upstream(&self, p: DVec2, dir: f64, cell: f64) -> DVec2 {
+        let s = if self.climb { 1.0 } else { -1.0 };
+        let h = dir + s * FRAC_PI_2;
+        let back = -DVec2::new(h.cos(), h.sin());
+        let res = self.l.sim.grid.res;
+        let rho = self.r + 2.5 * cell;
+        let off = -DVec2::new(dir.cos(), dir.sin());
+        let ds = res.max(0.5 * cell);
+        // no wall that way within reach (the common case in the open): nothing to do, and no
+        // clearance test (they dominate the planning time)
+        if !(1..=(2.0 * self.r / ds).ceil() as usize).any(|k| !self.allowed(p + back * (k as f64 * ds))) {
+            return p;
+        }
+        let mut q = p;
+        let mut t = 0.0;
+        while t < 2.0 * self.r {
+            let mut n = q + back * ds;
+            if !self.allowed(n) {
+                // at a wall: start there
+                return q;
+            }
+            // the front may bulge toward the tool: step off it until clear
+            let mut k = 0;
+            while !self.clear(n) && k < 8 {
+                n += off * ds;
+                k += 1;
+            }
+            if !self.clear(n) || !self.allowed(n) || !self.material_on_circle(n, rho) {
+                break;
+            }
+            q = n;
+            t += ds;
+        }
+        p
+    }
+
+    /// Material anywhere on the circle of radius `rho` around `p`.
+    fn material_on_circle(&self, p: DVec2, rho: f64) -> bool {
+        let h = self.l.sim.heights();
+        let g = self.l.sim.grid;
+        let thr = (self.z + 0.01) as f32;
+        (0..96).any(|k| {
+            let a = TAU * k as f64 / 96.0;
+            g.cell_of(p + DVec2::new(a.cos(), a.sin()) * rho).is_some_and(|(i, j)| h[j * g.nx + i] > thr)
+        })
     }
 
     /// Mean direction of the material seen on rings up to 3.5 cells of the coarse search larger
@@ -834,16 +889,8 @@ impl<'a, 'b> Engine<'a, 'b> {
         let cur = self.l.tp.end();
         if self.l.down_at == Some(z) && self.l.keep_safe(cur.truncate(), p, z) {
             let link = Path::Line { a: cur, b: p.extend(z) };
-            if self.l.sim.is_clear(&link, 0.75 * self.l.sim.grid.res) {
-                if (p - cur.truncate()).length() > 2.0 * self.l.job.tool.diameter {
-                    let lift = (z + 0.5).min(self.l.safe_z);
-                    self.l.push_line(MoveKind::Rapid, cur.truncate().extend(lift), 0.0);
-                    self.l.push_line(MoveKind::Rapid, p.extend(lift), 0.0);
-                    self.l.push_line(MoveKind::Descend, p.extend(z), self.l.entry_feed);
-                } else {
-                    // through cleared space: no engagement, the boosted feed of §5
-                    self.l.push_line(MoveKind::Link, p.extend(z), self.l.feed * self.l.params.feed_boost);
-                }
+            if self.l.sim.is_clear_leaving(&link, 0.75 * self.l.sim.grid.res) {
+                self.l.link_clear(p, z);
                 return;
             }
         }

@@ -239,6 +239,50 @@ impl<'a> Linker<'a> {
         }
     }
 
+    /// Moves the tool, down at `z`, to `to` along a straight way already found clear: a rapid at
+    /// depth (as FreeCAD's Adaptive links, `LiftDistance` 0), or with `feed_links` a feed move
+    /// at the cutting feed times the feed boost (§5: no engagement), lifted by a hair and
+    /// taken as a rapid when longer than two diameters.
+    fn link_clear(&mut self, to: DVec2, z: f64) {
+        if !self.params.feed_links {
+            // the tool leaves the end of a cut touching the material: feed until the rest of
+            // the way is clear, so that no rapid touches material
+            let a = self.tp.end().truncate();
+            let rest_clear = |me: &Self, t: f64| {
+                let from = a + (to - a) * t;
+                me.sim.is_clear(&Path::Line { a: from.extend(z), b: to.extend(z) }, me.clear_margin)
+            };
+            let t = if rest_clear(self, 0.0) {
+                0.0
+            } else {
+                let (mut lo, mut hi) = (0.0, 1.0);
+                for _ in 0..10 {
+                    let mid = 0.5 * (lo + hi);
+                    if rest_clear(self, mid) {
+                        hi = mid;
+                    } else {
+                        lo = mid;
+                    }
+                }
+                hi
+            };
+            if t > 0.0 {
+                self.push_line(MoveKind::Link, (a + (to - a) * t).extend(z), self.feed * self.params.feed_boost);
+            }
+            if t < 1.0 {
+                self.push_line(MoveKind::Rapid, to.extend(z), 0.0);
+            }
+        } else if (to - self.tp.end().truncate()).length() > 2.0 * self.job.tool.diameter {
+            let lift = (z + 0.5).min(self.safe_z);
+            let cur = self.tp.end();
+            self.push_line(MoveKind::Rapid, cur.truncate().extend(lift), 0.0);
+            self.push_line(MoveKind::Rapid, to.extend(lift), 0.0);
+            self.push_line(MoveKind::Descend, to.extend(z), self.entry_feed);
+        } else {
+            self.push_line(MoveKind::Link, to.extend(z), self.feed * self.params.feed_boost);
+        }
+    }
+
     fn pass(&mut self, pass: Pass, z: f64) {
         if pass.pts.is_empty() {
             return;
@@ -276,15 +320,8 @@ impl<'a> Linker<'a> {
                 arrived = true;
             } else if self.keep_safe(cur.truncate(), start, z) {
                 let link = Path::Line { a: cur, b: start.extend(z) };
-                if self.sim.is_clear(&link, self.clear_margin) {
-                    if len > 2.0 * self.job.tool.diameter {
-                        let lift = (z + 0.5).min(self.safe_z);
-                        self.push_line(MoveKind::Rapid, cur.truncate().extend(lift), 0.0);
-                        self.push_line(MoveKind::Rapid, start.extend(lift), 0.0);
-                        self.push_line(MoveKind::Descend, start.extend(z), self.entry_feed);
-                    } else {
-                        self.push_line(MoveKind::Link, start.extend(z), self.feed);
-                    }
+                if self.sim.is_clear_leaving(&link, self.clear_margin) {
+                    self.link_clear(start, z);
                     arrived = true;
                 } else if len <= (1.5 * self.step).max(0.5 * self.r) || self.clear_until_near(cur.truncate(), start, z)
                 {

@@ -171,7 +171,16 @@ pub struct RasterSim {
     /// Cells (i0, i1, j0, j1) whose material at the level was cleared since the last
     /// [`RasterSim::take_dirty`].
     dirty: Option<(usize, usize, usize, usize)>,
+    /// Highest material per block of `BLOCK`×`BLOCK` cells, and how many cells of the block
+    /// stand at that height (the block is read again when the last of them is lowered): lets
+    /// [`RasterSim::max_height_near`] skip whole blocks.
+    bmax: Vec<f32>,
+    bcnt: Vec<u32>,
+    nbx: usize,
 }
+
+/// Side of the blocks of [`RasterSim::max_height_near`], cells.
+const BLOCK: usize = 8;
 
 impl RasterSim {
     /// Builds the model of `job` for its tool.
@@ -272,7 +281,49 @@ impl RasterSim {
             level_thr: f32::INFINITY,
             reach_left: 0,
             dirty: None,
-        })
+            bmax: Vec::new(),
+            bcnt: Vec::new(),
+            nbx: 0,
+        }
+        .with_blocks())
+    }
+
+    /// Fills the block maxima.
+    fn with_blocks(mut self) -> Self {
+        self.nbx = self.grid.nx.div_ceil(BLOCK);
+        let nby = self.grid.ny.div_ceil(BLOCK);
+        self.bmax = vec![f32::NEG_INFINITY; self.nbx * nby];
+        self.bcnt = vec![0; self.nbx * nby];
+        for b in 0..self.bmax.len() {
+            self.read_block(b);
+        }
+        self
+    }
+
+    /// Cells (i0, i1, j0, j1) of block `b`.
+    fn block_cells(&self, b: usize) -> (usize, usize, usize, usize) {
+        let (bi, bj) = (b % self.nbx, b / self.nbx);
+        let (i0, j0) = (bi * BLOCK, bj * BLOCK);
+        (i0, (i0 + BLOCK).min(self.grid.nx) - 1, j0, (j0 + BLOCK).min(self.grid.ny) - 1)
+    }
+
+    /// Reads the maximum of block `b` and how many cells hold it.
+    fn read_block(&mut self, b: usize) {
+        let (i0, i1, j0, j1) = self.block_cells(b);
+        let mut m = f32::NEG_INFINITY;
+        let mut n = 0;
+        for j in j0..=j1 {
+            for &h in &self.s[j * self.grid.nx + i0..=j * self.grid.nx + i1] {
+                if h > m {
+                    m = h;
+                    n = 1;
+                } else if h == m {
+                    n += 1;
+                }
+            }
+        }
+        self.bmax[b] = m;
+        self.bcnt[b] = n;
     }
 
     /// Tool radius.
@@ -291,15 +342,34 @@ impl RasterSim {
         let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) else { return f32::NEG_INFINITY };
         let mut best = f32::NEG_INFINITY;
         let f = Fast::new(path);
-        for j in j0..=j1 {
-            for i in i0..=i1 {
-                let k = j * self.grid.nx + i;
-                let h = self.s[k];
-                if h <= best {
+        // block by block: a block below the best so far, or wholly outside, is skipped; one
+        // wholly inside gives its maximum; only the blocks on the circle's edge are read cell
+        // by cell (the same cells, so the same answer, as reading them all)
+        for bj in j0 / BLOCK..=j1 / BLOCK {
+            for bi in i0 / BLOCK..=i1 / BLOCK {
+                let b = bj * self.nbx + bi;
+                if self.bmax[b] <= best {
                     continue;
                 }
-                if f.distance(self.grid.center(i, j)) <= rho {
-                    best = h;
+                let (ci0, ci1, cj0, cj1) = self.block_cells(b);
+                let (a, c) = (self.grid.center(ci0, cj0), self.grid.center(ci1, cj1));
+                let half = 0.5 * (c - a).length() + 1e-9;
+                let d = f.distance(0.5 * (a + c));
+                if d - half > rho {
+                    continue;
+                }
+                let (ci0, ci1, cj0, cj1) = (ci0.max(i0), ci1.min(i1), cj0.max(j0), cj1.min(j1));
+                if d + half <= rho && (ci0, ci1, cj0, cj1) == self.block_cells(b) {
+                    best = self.bmax[b];
+                    continue;
+                }
+                for j in cj0..=cj1 {
+                    for i in ci0..=ci1 {
+                        let h = self.s[j * self.grid.nx + i];
+                        if h > best && f.distance(self.grid.center(i, j)) <= rho {
+                            best = h;
+                        }
+                    }
                 }
             }
         }
@@ -311,6 +381,25 @@ impl RasterSim {
     pub fn is_clear(&self, path: &Path, margin: f64) -> bool {
         let mut clear = true;
         visit_above(&self.grid, &self.s, path, self.r + margin, self.eps, |_, _, _| {
+            clear = false;
+            false
+        });
+        clear
+    }
+
+    /// [`RasterSim::is_clear`] for a move that leaves the tool's present position: material
+    /// the tool already touches where the path starts (within its radius plus `margin` of the
+    /// start) does not count, everything the move would reach beyond it does. A feed link away
+    /// from the end of a cut is then not taken for a cut.
+    pub fn is_clear_leaving(&self, path: &Path, margin: f64) -> bool {
+        let rho = self.r + margin;
+        let a = path.at(0.0);
+        let mut clear = true;
+        visit_above(&self.grid, &self.s, path, rho, self.eps, |k, q, _| {
+            // within the disk of the tool at the start and standing above its tip there
+            if (q - a.truncate()).length() <= rho && self.s[k] as f64 > a.z + self.eps {
+                return true;
+            }
             clear = false;
             false
         });
@@ -388,6 +477,13 @@ impl RasterSim {
                 });
             }
             self.s[k] = z;
+            let b = (k / self.grid.nx / BLOCK) * self.nbx + (k % self.grid.nx) / BLOCK;
+            if h == self.bmax[b] {
+                self.bcnt[b] -= 1;
+                if self.bcnt[b] == 0 {
+                    self.read_block(b);
+                }
+            }
         }
     }
 

@@ -106,6 +106,10 @@ pub struct Params {
     /// Adaptive: raise the feed where the engagement is low (paper 1 §5), up to this factor
     /// (1 = off).
     pub feed_boost: f64,
+    /// Links through cleared space at depth as feed moves (G1 at the cutting feed, times the
+    /// feed boost; lifted rapids when long) instead of rapids at depth (G0): for controls
+    /// whose G0 does not move in a straight line.
+    pub feed_links: bool,
 }
 
 impl Default for Params {
@@ -126,6 +130,7 @@ impl Default for Params {
             entry_feed_frac: 0.5,
             overshoot_deg: 20.0,
             feed_boost: 1.0,
+            feed_links: false,
         }
     }
 }
