@@ -119,6 +119,11 @@ pub struct Regions {
     pub reachable: Area,
     /// A box around everything, used as the "whole plane".
     pub window: Area,
+    /// `keep` grown by `walls_at` (the radius plus the wall margin): `centres` is the window
+    /// less this.
+    pub walls: Area,
+    /// The offset of `walls`, mm.
+    pub walls_at: f64,
 }
 
 /// Chord tolerance used when polygons stand for circles in region computations (mm).
@@ -216,7 +221,9 @@ impl Job {
         };
         let pad = 4.0 * r + 10.0;
         let window = Area::rect(lo.x - pad, lo.y - pad, hi.x + pad, hi.y + pad);
-        let centres = window.difference(&keep.offset(r + margin.max(0.0), REGION_TOL));
+        let walls_at = r + margin.max(0.0);
+        let walls = keep.offset(walls_at, REGION_TOL);
+        let centres = window.difference(&walls);
         // centres that matter: the tool touches material
         let touching = centres.intersection(&material.offset(r, REGION_TOL));
         let reachable = touching.offset(r, REGION_TOL).intersection(&material).without_slivers(1e-6);
@@ -235,7 +242,7 @@ impl Job {
                 ),
             ));
         }
-        Ok(Regions { keep, material, centres, reachable, window })
+        Ok(Regions { keep, material, centres, reachable, window, walls, walls_at })
     }
 }
 

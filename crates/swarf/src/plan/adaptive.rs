@@ -6,7 +6,9 @@
 //! 1. **Find a starting point** (§4.5), in the paper's order: a *resume point* where contouring
 //!    gave way to constant engagement (the tool returns there sideways, along the wall it was
 //!    following); a *lateral entry* tangent to the remaining stock from free space or cleared
-//!    area, never tangent to the part; a *helix* at the maximum of the distance to the walls when
+//!    area, never tangent to the part — where walls bound the front on both sides within a tool
+//!    diameter (a slot), it is first moved back along the front to the wall behind it, so the
+//!    pass sweeps the whole front and the passes and links make trochoidal loops; a *helix* at the maximum of the distance to the walls when
 //!    that is larger than the tool radius (so a slot barely wider than the tool is entered); a
 //!    *plunge* only as the last resort, reported.
 //! 2. **Constant-engagement milling** (§4.3, Algorithm 1). The circumference of the tool is
@@ -40,8 +42,8 @@
 //! swept cells are visited). Every pass is simplified with Douglas–Peucker (§5.1) within 2 µm
 //! and arc-fitted within the arc tolerance; the walls are kept at `R` plus both tolerances, so
 //! neither can bring the tool into the part. A start that removes next to nothing is not tried
-//! again on that level. Links between passes stay down through cleared space or lift over it
-//! (see [`super`]); because the model cuts cells by their centres, a cell counted as cut can hold
+//! again on that level. Links between passes stay down through cleared space (rapids at depth,
+//! fed while the tool leaves the material it touches) or lift over it (see [`super`]); because the model cuts cells by their centres, a cell counted as cut can hold
 //! material up to 0.71 cell from its centre, so landings are tested 1.5 cells and links 0.75 cell
 //! beyond the tool. What the passes leave (slivers the ring cannot see, strips along walls too
 //! heavy to follow) is found exactly from the swept area and cleared by
@@ -67,7 +69,7 @@ use crate::error::Result;
 use crate::geom::index::EdgeIndex;
 use crate::geom::simplify::douglas_peucker;
 use crate::geom::{DVec2, polyline_length, wrap_pi};
-use crate::model::{Job, REGION_TOL, Regions};
+use crate::model::{Job, Regions};
 use crate::sim::SimOptions;
 use crate::sim::edt;
 use crate::sim::sweep::Path;
@@ -83,6 +85,9 @@ const STEP_SLACK_DEG: f64 = 3.0;
 /// Largest engagement above the reference that contouring tolerates before it switches back
 /// to constant engagement, degrees.
 const CONTOUR_SLACK_DEG: f64 = 5.0;
+/// Engagement above the reference at which a constant-engagement step that cannot turn
+/// further from the material is not taken, degrees.
+const HEAVY_DEG: f64 = 10.0;
 /// Engagement below which contouring counts as cutting air, degrees.
 const AIR_DEG: f64 = 3.0;
 /// Degrees skipped at the tool's side when looking for the engaged arc (eq. 8).
@@ -121,9 +126,12 @@ pub fn link_adaptive(
         if left.is_empty() {
             continue;
         }
-        let extra = crate::strategy::cleanup::passes_for_leftover(geom, params, &left);
+        let extra = crate::strategy::cleanup::passes_for_leftover(geom, params, &left, eng.l.sim.grid.res);
         if std::env::var("SWARF_DEBUG").is_ok() {
             eprintln!("leftover at z {z}: {:.2} mm2, {} clean-up passes", left.area(), extra.len());
+            for ring in left.rings().filter(|r| crate::geom::ring_area(r).abs() > 0.5) {
+                eprintln!("  piece of {:.2} mm2 at {:?}", crate::geom::ring_area(ring), ring[0]);
+            }
         }
         if extra.is_empty() {
             continue;
@@ -157,8 +165,8 @@ struct Walls {
 }
 
 impl Walls {
-    fn new(keep: &crate::geom::Area, level: f64, cell: f64) -> Walls {
-        let grown = keep.offset(level, REGION_TOL);
+    /// The contours of `grown` (the walls grown by the tool radius and margin).
+    fn new(grown: &crate::geom::Area, cell: f64) -> Walls {
         let mut rings = Vec::new();
         let mut cum = Vec::new();
         let mut edges = Vec::new();
@@ -305,7 +313,8 @@ impl<'a, 'b> Engine<'a, 'b> {
         let grid = l.sim.grid;
         let keep = l.sim.keep_mask();
         let dk: Vec<f32> = edt::distance(&keep, grid.nx, grid.ny).iter().map(|d| d * grid.res as f32).collect();
-        let walls = Walls::new(&geom.keep, r + margin, (2.0 * r).max(1.0));
+        debug_assert!((geom.wall_level - (r + margin)).abs() < 1e-12);
+        let walls = Walls::new(&geom.walls, (2.0 * r).max(1.0));
         let theta = job.width.engagement_deg();
         let step = (0.1 * job.tool.diameter).max(2.0 * grid.res);
         // the enlarged ring of footnote 3: 10 % of the radius, at least 5 cells
@@ -585,7 +594,8 @@ impl<'a, 'b> Engine<'a, 'b> {
 
     /// A lateral start `p` (material toward `dir`) moved back along the front, against the
     /// heading the pass will take, as long as it stays clear, allowed and beside the material —
-    /// but only when that ends at a wall within a tool diameter; otherwise `p` itself.
+    /// but only where walls bound the front within a tool diameter both ways (a slot) and the
+    /// move ends at one; otherwise `p` itself.
     fn upstream(&self, p: DVec2, dir: f64, cell: f64) -> DVec2 {
         let s = if self.climb { 1.0 } else { -1.0 };
         let h = dir + s * FRAC_PI_2;
@@ -594,9 +604,13 @@ impl<'a, 'b> Engine<'a, 'b> {
         let rho = self.r + 2.5 * cell;
         let off = -DVec2::new(dir.cos(), dir.sin());
         let ds = res.max(0.5 * cell);
-        // no wall that way within reach (the common case in the open): nothing to do, and no
-        // clearance test (they dominate the planning time)
-        if !(1..=(2.0 * self.r / ds).ceil() as usize).any(|k| !self.allowed(p + back * (k as f64 * ds))) {
+        // only where the front is short — walls within reach both ways, as in a slot: in the
+        // open the pass runs along the front anyway (and no clearance test is made: they
+        // dominate the planning time)
+        let wall = |sign: f64, reach: f64| {
+            (1..=(reach / ds).ceil() as usize).any(|k| !self.allowed(p + back * (sign * k as f64 * ds)))
+        };
+        if !wall(-1.0, 2.0 * self.r) || !wall(1.0, 2.0 * self.r) {
             return p;
         }
         let mut q = p;
@@ -887,12 +901,12 @@ impl<'a, 'b> Engine<'a, 'b> {
     /// Gets the tool down at `p` (clear there) for a sideways start.
     fn arrive(&mut self, p: DVec2, z: f64) {
         let cur = self.l.tp.end();
-        if self.l.down_at == Some(z) && self.l.keep_safe(cur.truncate(), p, z) {
-            let link = Path::Line { a: cur, b: p.extend(z) };
-            if self.l.sim.is_clear_leaving(&link, 0.75 * self.l.sim.grid.res) {
-                self.l.link_clear(p, z);
-                return;
-            }
+        if self.l.down_at == Some(z)
+            && self.l.keep_safe(cur.truncate(), p, z)
+            && let Some(t) = self.l.sim.leaving_distance(cur, p.extend(z), self.l.clear_margin)
+        {
+            self.l.link_clear(p, z, t);
+            return;
         }
         let top = self.l.top_near(p, self.r + crate::strategy::LANDING_MARGIN + 1.5 * self.l.sim.grid.res);
         let h = (z + self.l.params.approach).max(if top.is_finite() { top + self.l.params.approach } else { z });
@@ -1009,7 +1023,13 @@ impl<'a, 'b> Engine<'a, 'b> {
             let end = if e0 > self.theta { alpha_p - toward * lim } else { alpha_p + toward * lim };
             let e1 = eval(self, end);
             if (e0 > self.theta) == (e1 > self.theta) {
-                alpha = end; // saturated: turn as far as the front half allows
+                // saturated: turn as far as the front half allows — unless even that is too
+                // heavy, when the pass ends here (another start takes the material from a
+                // better side)
+                if e1 > self.theta + HEAVY_DEG {
+                    return EngageStep::Done;
+                }
+                alpha = end;
             } else {
                 let (mut lo, mut hi) = (guess, end); // e(lo) and e(hi) straddle theta
                 for _ in 0..7 {
@@ -1132,6 +1152,24 @@ fn feed_runs(pts: &[DVec2], rem: &[u32], res: f64, r: f64, d: f64, boost: f64) -
     out
 }
 
+/// A pass as it is planned: its points, the cells each step removed (for the feed of §5), and
+/// how many points reach the last step that removed material (the air after it is dropped).
+struct Trace {
+    pts: Vec<DVec2>,
+    rem: Vec<u32>,
+    last_cut: usize,
+}
+
+/// Outcome of one constant-engagement step.
+enum EngageStep {
+    /// Moved to the point, heading.
+    Moved(DVec2, f64),
+    /// The step would bring the tool into the part: contour instead.
+    Wall,
+    /// No material around the tool: the pass ends.
+    Done,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1171,22 +1209,4 @@ mod tests {
         // never above the boost, never below the programmed feed
         assert!(runs.iter().all(|(_, m)| (1.0..=1.5).contains(m)));
     }
-}
-
-/// A pass as it is planned: its points, the cells each step removed (for the feed of §5), and
-/// how many points reach the last step that removed material (the air after it is dropped).
-struct Trace {
-    pts: Vec<DVec2>,
-    rem: Vec<u32>,
-    last_cut: usize,
-}
-
-/// Outcome of one constant-engagement step.
-enum EngageStep {
-    /// Moved to the point, heading.
-    Moved(DVec2, f64),
-    /// The step would bring the tool into the part: contour instead.
-    Wall,
-    /// No material around the tool: the pass ends.
-    Done,
 }

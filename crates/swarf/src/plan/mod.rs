@@ -3,8 +3,11 @@
 //!
 //! For each pass, in order:
 //! 1. If the tool is down at this level and the straight way to the pass start is free of the
-//!    part: through cleared space it stays down (a feed link, or a rapid lifted by a hair when
-//!    long); through material only when the step is short (a stepover), as a cut.
+//!    part: through cleared space it stays down — a rapid at depth, as FreeCAD's Adaptive links
+//!    (`LiftDistance` 0), after a short feed move while the tool still touches the material it
+//!    just cut; with `feed_links`, a feed move (a rapid lifted by a hair when long) for
+//!    controls whose G0 is not straight. Through material only when the step is short (a
+//!    stepover), as a cut.
 //! 2. Otherwise the tool goes up just as far as it must (to the safe height only when the way
 //!    across is not clear), over to the start, and down:
 //!    - a rapid to just above the material and a feed descent when the tool lands in free space
@@ -109,6 +112,8 @@ pub(crate) struct Linker<'a> {
     r: f64,
     feed: f64,
     entry_feed: f64,
+    /// Helix and ramp feed.
+    ramp_feed: f64,
     /// The level the tool is down at, if it is.
     down_at: Option<f64>,
     step: f64,
@@ -138,6 +143,7 @@ impl<'a> Linker<'a> {
             r: job.radius(),
             feed: job.feed,
             entry_feed: job.feed * params.entry_feed_frac,
+            ramp_feed: job.feed * params.ramp_feed_frac,
             down_at: None,
             step: job.stepover_mm(),
             precut: false,
@@ -192,16 +198,18 @@ impl<'a> Linker<'a> {
         self.sim.keep_distance(&p, self.r) >= self.r - 1e-6
     }
 
-    /// True when the way from `a` to `b` at `z` is clear of material except within one tool
-    /// diameter of `b`: arriving there is a lateral entry, not a cut through material.
-    fn clear_until_near(&self, a: DVec2, b: DVec2, z: f64) -> bool {
+    /// When the way from `a` to `b` at `z` is clear of material except within one tool
+    /// diameter of `b` (arriving there is a lateral entry, not a cut through material): the
+    /// point `m` that far from `b`, and how far the way to it still touches what the tool
+    /// touches at `a` (see [`RasterSim::leaving_distance`]).
+    fn clear_until_near(&self, a: DVec2, b: DVec2, z: f64) -> Option<(DVec2, f64)> {
         let len = (b - a).length();
         let keep_out = 2.0 * self.r;
         if len <= keep_out {
-            return false;
+            return None;
         }
         let m = a + (b - a) * ((len - keep_out) / len);
-        self.sim.is_clear(&Path::Line { a: a.extend(z), b: m.extend(z) }, self.clear_margin)
+        self.sim.leaving_distance(a.extend(z), m.extend(z), self.clear_margin).map(|t| (m, t))
     }
 
     /// Highest material within `rho` of the point (−∞ when none).
@@ -243,33 +251,17 @@ impl<'a> Linker<'a> {
     /// depth (as FreeCAD's Adaptive links, `LiftDistance` 0), or with `feed_links` a feed move
     /// at the cutting feed times the feed boost (§5: no engagement), lifted by a hair and
     /// taken as a rapid when longer than two diameters.
-    fn link_clear(&mut self, to: DVec2, z: f64) {
+    /// `t`: how far along the way the tool still touches the material it touched at the start
+    /// (see [`RasterSim::leaving_distance`]): that part is fed, never a rapid.
+    fn link_clear(&mut self, to: DVec2, z: f64, t: f64) {
         if !self.params.feed_links {
-            // the tool leaves the end of a cut touching the material: feed until the rest of
-            // the way is clear, so that no rapid touches material
             let a = self.tp.end().truncate();
-            let rest_clear = |me: &Self, t: f64| {
-                let from = a + (to - a) * t;
-                me.sim.is_clear(&Path::Line { a: from.extend(z), b: to.extend(z) }, me.clear_margin)
-            };
-            let t = if rest_clear(self, 0.0) {
-                0.0
-            } else {
-                let (mut lo, mut hi) = (0.0, 1.0);
-                for _ in 0..10 {
-                    let mid = 0.5 * (lo + hi);
-                    if rest_clear(self, mid) {
-                        hi = mid;
-                    } else {
-                        lo = mid;
-                    }
-                }
-                hi
-            };
+            let len = (to - a).length();
             if t > 0.0 {
-                self.push_line(MoveKind::Link, (a + (to - a) * t).extend(z), self.feed * self.params.feed_boost);
+                let m = if len > 1e-12 { a + (to - a) * (t / len) } else { to };
+                self.push_line(MoveKind::Link, m.extend(z), self.feed * self.params.feed_boost);
             }
-            if t < 1.0 {
+            if t < len {
                 self.push_line(MoveKind::Rapid, to.extend(z), 0.0);
             }
         } else if (to - self.tp.end().truncate()).length() > 2.0 * self.job.tool.diameter {
@@ -319,14 +311,17 @@ impl<'a> Linker<'a> {
             if len < 1e-9 {
                 arrived = true;
             } else if self.keep_safe(cur.truncate(), start, z) {
-                let link = Path::Line { a: cur, b: start.extend(z) };
-                if self.sim.is_clear_leaving(&link, self.clear_margin) {
-                    self.link_clear(start, z);
+                if let Some(t) = self.sim.leaving_distance(cur, start.extend(z), self.clear_margin) {
+                    self.link_clear(start, z, t);
                     arrived = true;
-                } else if len <= (1.5 * self.step).max(0.5 * self.r) || self.clear_until_near(cur.truncate(), start, z)
-                {
-                    // a short step, or a way through cleared space that only meets material
-                    // on arriving: a lateral entry into the pass
+                } else if len <= (1.5 * self.step).max(0.5 * self.r) {
+                    // a short step: a lateral entry into the pass
+                    self.push_line(MoveKind::Cut, start.extend(z), self.feed);
+                    arrived = true;
+                } else if let Some((m, t)) = self.clear_until_near(cur.truncate(), start, z) {
+                    // a way through cleared space that only meets material on arriving: a link
+                    // to a tool diameter before it, then a lateral entry
+                    self.link_clear(m, z, t);
                     self.push_line(MoveKind::Cut, start.extend(z), self.feed);
                     arrived = true;
                 }
@@ -480,7 +475,7 @@ impl<'a> Linker<'a> {
         for k in 1..=n {
             let t = k as f64 / n as f64;
             let a = a0 + s * total * t;
-            self.push_arc(MoveKind::Entry, on(a).extend(z_from + (z - z_from) * t), c, ccw, self.entry_feed);
+            self.push_arc(MoveKind::Entry, on(a).extend(z_from + (z - z_from) * t), c, ccw, self.ramp_feed);
         }
         let a_end = a0 + s * total;
         self.push_arc(MoveKind::Cut, on(a_end + s * std::f64::consts::PI).extend(z), c, ccw, self.feed);
@@ -503,7 +498,7 @@ impl<'a> Linker<'a> {
             for q in &seq[1..] {
                 let d = (*q - prev).length();
                 zc = (zc - d * drop_per_len).max(z);
-                self.push_line(MoveKind::Entry, q.extend(zc), self.entry_feed);
+                self.push_line(MoveKind::Entry, q.extend(zc), self.ramp_feed);
                 prev = *q;
             }
             forward = !forward;

@@ -387,23 +387,34 @@ impl RasterSim {
         clear
     }
 
-    /// [`RasterSim::is_clear`] for a move that leaves the tool's present position: material
-    /// the tool already touches where the path starts (within its radius plus `margin` of the
-    /// start) does not count, everything the move would reach beyond it does. A feed link away
-    /// from the end of a cut is then not taken for a cut.
-    pub fn is_clear_leaving(&self, path: &Path, margin: f64) -> bool {
+    /// A straight move that leaves the tool's present position, checked with the radius plus
+    /// `margin`: material the tool already touches at the start (within that radius of the
+    /// start, standing above its tip) does not count. `None` when the move reaches any other
+    /// material; otherwise how far along it (mm) the tool has left the touched material
+    /// behind — from there on it touches nothing (0 when it touches nothing at all), so the
+    /// rest can be a rapid.
+    pub fn leaving_distance(&self, a: DVec3, b: DVec3, margin: f64) -> Option<f64> {
         let rho = self.r + margin;
-        let a = path.at(0.0);
+        let path = Path::Line { a, b };
+        let (a2, b2) = (a.truncate(), b.truncate());
+        let len = (b2 - a2).length();
+        let u = if len > 1e-12 { (b2 - a2) / len } else { DVec2::ZERO };
         let mut clear = true;
-        visit_above(&self.grid, &self.s, path, rho, self.eps, |k, q, _| {
-            // within the disk of the tool at the start and standing above its tip there
-            if (q - a.truncate()).length() <= rho && self.s[k] as f64 > a.z + self.eps {
+        let mut t: f64 = 0.0;
+        visit_above(&self.grid, &self.s, &path, rho, self.eps, |k, q, _| {
+            if (q - a2).length() <= rho && self.s[k] as f64 > a.z + self.eps {
+                // the points of the line within `rho` of q end at its projection plus the
+                // half chord
+                let d = q - a2;
+                let along = d.dot(u);
+                let perp2 = (d.length_squared() - along * along).max(0.0);
+                t = t.max(along + (rho * rho - perp2).max(0.0).sqrt());
                 return true;
             }
             clear = false;
             false
         });
-        clear
+        clear.then(|| (t + 1e-6).min(len))
     }
 
     /// Exact distance from the XY path to the part/fixture boundary (capped at `max`), or 0

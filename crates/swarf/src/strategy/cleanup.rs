@@ -14,6 +14,17 @@ use crate::model::REGION_TOL;
 /// Leftovers thinner than twice this (mm) are numerical slivers, not material.
 const SLIVER: f64 = 0.02;
 
+/// Offset tolerance of the zones that clip clean-up passes, mm (an offset within it only
+/// grows the zone).
+const ZONE_TOL: f64 = 0.01;
+
+/// Radius, as a fraction of the tool radius, of the fillets the adaptive clean-up's wall contour
+/// puts in the corners its tool centres cannot turn round.
+const CORNER_ROUND: f64 = 0.05;
+
+/// Share of the reachable area that the fillets of the wall contour may leave, at most.
+const REST_BUDGET: f64 = 0.0015;
+
 /// The area the passes sweep, slightly under-estimated (simplified within 5 µm, tool radius
 /// less 10 µm): leftovers are then over-estimated by slivers that [`leftover`] drops.
 fn swept(passes: &[Pass], r: f64) -> Area {
@@ -57,18 +68,41 @@ pub fn passes(g: &LayerGeom, params: &Params, existing: &[Pass]) -> Vec<Pass> {
 
 /// Passes for a leftover known otherwise (the adaptive strategy reads it off its material
 /// model): level curves at a quarter of the stepover near it, in one round.
-pub fn passes_for_leftover(g: &LayerGeom, params: &Params, left: &Area) -> Vec<Pass> {
+///
+/// `cell` is the size of the raster cells the leftover was read from: the leftover is a
+/// staircase with a vertex at every cell corner, and offsets of it by the tool radius (round
+/// joins at every vertex) would cost more than the rest of the planning. It is simplified
+/// within a cell first, and the zones it gives are grown by as much (they only say where the
+/// clean-up passes are clipped).
+pub fn passes_for_leftover(g: &LayerGeom, params: &Params, left: &Area, cell: f64) -> Vec<Pass> {
     let left = left.offset(-SLIVER, REGION_TOL).offset(SLIVER, REGION_TOL).intersection(left).without_slivers(0.01);
     if left.is_empty() {
         return Vec::new();
     }
-    let mut out = level_curves(g, params, &left, g.step / 4.0);
+    let left = left.simplified(cell);
+    let mut out = level_curves(g, params, &left.offset(cell, ZONE_TOL), g.step / 4.0);
     // the wall contour itself, last: what is left against the walls
     if !g.keep.is_empty() {
         // (the wall contour is the edge of the centres' region: clip by the leftover's reach
         // only, or the clipper may drop the contour as outside)
-        let zone = left.offset(g.r + 0.01, REGION_TOL);
-        out.extend(super::offset::level_passes(&g.keep, g.wall_level, &zone, params, true, PassKind::Cleanup));
+        let zone = left.offset(g.r + 0.01 + cell, ZONE_TOL);
+        // with the corners where the walls close round the tool rounded off: a tool driven
+        // into such a corner meets the material it can never clear on a quarter of its
+        // circumference, a 90° engagement however little it removes; the fillet leaves a
+        // sliver of a few hundredths of a mm² instead
+        // the fillets leave a crescent of about (1 / cos(φ/2) − 1)·ρ thick along φ·R of the
+        // tool's circle at each corner turning by φ: ρ is kept small enough that all of them
+        // together stay under REST_BUDGET of the reachable area (tight pockets have many
+        // corners for their size)
+        let per_rho: f64 = g
+            .walls
+            .rings()
+            .flat_map(|r| away_turns(r).into_iter())
+            .map(|phi| (1.0 / (0.5 * phi).cos().max(0.1) - 1.0) * phi * g.r * 0.5)
+            .sum();
+        let rho = (CORNER_ROUND * g.r).min(REST_BUDGET * g.reachable.area() / per_rho.max(1e-12));
+        let rings: Vec<Vec<DVec2>> = g.walls.rings().map(|r| fillet_away(r, rho)).collect();
+        out.extend(super::offset::rings_passes(&rings, g.wall_level, &zone, params, true, PassKind::Cleanup));
     }
     out
 }
@@ -76,7 +110,7 @@ pub fn passes_for_leftover(g: &LayerGeom, params: &Params, left: &Area) -> Vec<P
 /// Level curves of the wall distance (or of the stock outline without walls) at spacing
 /// `step`, clipped to where the tool touches `left`, farthest from the walls first.
 fn level_curves(g: &LayerGeom, params: &Params, left: &Area, step: f64) -> Vec<Pass> {
-    let zone = left.offset(g.r, REGION_TOL).intersection(&g.centres);
+    let zone = left.offset(g.r, ZONE_TOL).intersection(&g.centres);
     let mut new = Vec::new();
     {
         if g.keep.is_empty() {
@@ -104,7 +138,7 @@ fn level_curves(g: &LayerGeom, params: &Params, left: &Area, step: f64) -> Vec<P
             }
         } else {
             let mut k = 1usize;
-            let mut grown = g.keep.offset(g.wall_level, REGION_TOL);
+            let mut grown = g.walls.clone();
             loop {
                 let level = g.wall_level + k as f64 * step;
                 grown = grown.simplified(super::offset::GROW_SIMPLIFY).offset(step, REGION_TOL);
@@ -119,4 +153,57 @@ fn level_curves(g: &LayerGeom, params: &Params, left: &Area, step: f64) -> Vec<P
     // farthest from the walls first, like the clearing
     new.sort_by(|a, b| b.level.total_cmp(&a.level));
     new
+}
+
+/// Smallest turn that [`fillet_away`] rounds, radians.
+const FILLET_MIN_TURN: f64 = 5.0 * std::f64::consts::PI / 180.0;
+
+/// The turns away from the walls (radians, positive) at the corners of `ring` that
+/// [`fillet_away`] rounds.
+fn away_turns(ring: &[DVec2]) -> Vec<f64> {
+    let n = ring.len();
+    (0..n)
+        .filter_map(|i| {
+            let (p, q, s) = (ring[(i + n - 1) % n], ring[i], ring[(i + 1) % n]);
+            let (a, b) = ((q - p).normalize_or_zero(), (s - q).normalize_or_zero());
+            let turn = -a.perp_dot(b).atan2(a.dot(b));
+            (n >= 3 && turn > FILLET_MIN_TURN && a != DVec2::ZERO && b != DVec2::ZERO).then_some(turn)
+        })
+        .collect()
+}
+
+/// `ring` (a wall contour: the walls on its left) with every corner that turns away from the
+/// walls by more than a few degrees replaced by an arc of radius `rho` (within half of each
+/// neighbouring edge). The arc lies on the side away from the walls, so the tool only keeps
+/// farther from them.
+fn fillet_away(ring: &[DVec2], rho: f64) -> Vec<DVec2> {
+    let n = ring.len();
+    if n < 3 || rho <= 0.0 {
+        return ring.to_vec();
+    }
+    let mut out = Vec::with_capacity(n + 16);
+    for i in 0..n {
+        let (p, q, s) = (ring[(i + n - 1) % n], ring[i], ring[(i + 1) % n]);
+        let (a, b) = ((q - p).normalize_or_zero(), (s - q).normalize_or_zero());
+        let turn = a.perp_dot(b).atan2(a.dot(b)); // > 0: left, toward the walls
+        if -turn <= FILLET_MIN_TURN || a == DVec2::ZERO || b == DVec2::ZERO {
+            out.push(q);
+            continue;
+        }
+        let phi = -turn;
+        // tangent length of the fillet, within half of each edge
+        let t = (rho * (0.5 * phi).tan()).min(0.5 * (q - p).length()).min(0.5 * (s - q).length());
+        let rr = t / (0.5 * phi).tan();
+        let (t0, t1) = (q - a * t, q + b * t);
+        // centre on the right of the travel (away from the walls)
+        let c = t0 + DVec2::new(a.y, -a.x) * rr;
+        let (a0, a1) = ((t0 - c).y.atan2((t0 - c).x), (t1 - c).y.atan2((t1 - c).x));
+        let sweep = crate::geom::wrap_pi(a1 - a0);
+        let k = ((sweep.abs() / 5f64.to_radians()).ceil() as usize).max(2);
+        for j in 0..=k {
+            let ang = a0 + sweep * j as f64 / k as f64;
+            out.push(c + DVec2::new(ang.cos(), ang.sin()) * rr);
+        }
+    }
+    out
 }

@@ -98,8 +98,12 @@ pub struct Params {
     pub clearance: f64,
     /// Height above material from which to start entries and descents, mm.
     pub approach: f64,
-    /// Entry (ramp, helix, plunge) feed as a fraction of the cutting feed.
+    /// Plunge and descent feed as a fraction of the cutting feed.
     pub entry_feed_frac: f64,
+    /// Helix and ramp feed as a fraction of the cutting feed (along the path: at a 3° ramp the
+    /// tool descends at 5 % of it; FreeCAD's Adaptive and most CAM systems ramp at the cutting
+    /// feed).
+    pub ramp_feed_frac: f64,
     /// Adaptive: how far above the reference engagement contouring along a wall may go before
     /// the tool turns back to constant-engagement milling (paper 1 §4.4), degrees.
     pub overshoot_deg: f64,
@@ -128,6 +132,7 @@ impl Default for Params {
             clearance: 5.0,
             approach: 1.0,
             entry_feed_frac: 0.5,
+            ramp_feed_frac: 1.0,
             overshoot_deg: 20.0,
             feed_boost: 1.0,
             feed_links: false,
@@ -175,6 +180,8 @@ pub struct LayerGeom {
     pub keep: Area,
     /// Offset of the first pass from `keep` (tool radius plus a margin for arc fitting).
     pub wall_level: f64,
+    /// `keep` grown by `wall_level`: its rings are the wall contours.
+    pub walls: Area,
     /// Where a tool centre touches material (material grown by `R − ε`).
     pub touch: Area,
     /// Where a tool centre may go for roughing: `touch` minus `keep` grown by `wall_level`.
@@ -193,17 +200,21 @@ impl LayerGeom {
         let keep = if leave > 0.0 { regions.keep.offset(leave, REGION_TOL) } else { regions.keep.clone() };
         let wall_level = r + wall_margin(params);
         let touch = regions.material.offset(r + TOUCH_MARGIN, REGION_TOL);
-        let centres = if keep.is_empty() {
-            touch.clone()
+        // (the regions have it when nothing is left for finishing)
+        let walls = if leave == 0.0 && regions.walls_at == wall_level {
+            regions.walls.clone()
         } else {
-            touch.intersection(&regions.window.difference(&keep.offset(wall_level, REGION_TOL)))
+            keep.offset(wall_level, REGION_TOL)
         };
+        let centres =
+            if keep.is_empty() { touch.clone() } else { touch.intersection(&regions.window.difference(&walls)) };
         let reachable = centres.offset(r, REGION_TOL).intersection(&regions.material).without_slivers(1e-6);
         Ok(LayerGeom {
             r,
             step: job.stepover_mm(),
             keep,
             wall_level,
+            walls,
             touch,
             centres,
             reachable,

@@ -208,8 +208,21 @@ pub fn ring_passes(
     toward_walls: bool,
     kind: PassKind,
 ) -> Vec<Pass> {
+    let rings: Vec<Vec<DVec2>> = grown.rings().cloned().collect();
+    rings_passes(&rings, level, touch, params, toward_walls, kind)
+}
+
+/// [`ring_passes`] along given rings (the walls on their left).
+pub fn rings_passes(
+    rings: &[Vec<DVec2>],
+    level: f64,
+    touch: &Area,
+    params: &Params,
+    toward_walls: bool,
+    kind: PassKind,
+) -> Vec<Pass> {
     let mut out = Vec::new();
-    for ring in grown.rings() {
+    for ring in rings {
         // rings of the grown walls have the walls on their left; cutting toward the walls
         // (inside-out) with climb wants them on the right
         let mut pts = ring.clone();
