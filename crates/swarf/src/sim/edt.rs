@@ -66,29 +66,34 @@ pub const INF: f32 = 1e20;
 /// Distance (in cells) from every cell to the nearest cell where `site` is true, over an
 /// `nx × ny` row-major grid; `INF.sqrt()`-like large values where there is no site at all.
 pub fn distance(site: &[bool], nx: usize, ny: usize) -> Vec<f32> {
-    let mut g: Vec<f32> = site.iter().map(|s| if *s { 0.0 } else { INF }).collect();
+    use rayon::prelude::*;
+    if nx == 0 || ny == 0 {
+        return Vec::new();
+    }
     let m = nx.max(ny) + 1;
-    let mut v = vec![0usize; m];
-    let mut z = vec![0f32; m + 1];
-    let mut col = vec![0f32; ny];
-    let mut out = vec![0f32; ny];
-    for i in 0..nx {
-        for j in 0..ny {
-            col[j] = g[j * nx + i];
+    let scratch = || (vec![0usize; m], vec![0f32; m + 1], vec![0f32; m]);
+    // columns: on the transposed grid (row i of `t` is column i), so that each 1-D pass reads
+    // and writes contiguous memory and the columns run in parallel
+    let mut t = vec![0f32; nx * ny];
+    t.par_chunks_mut(ny).enumerate().for_each_init(scratch, |(v, z, out), (i, col)| {
+        for (j, c) in col.iter_mut().enumerate() {
+            *c = if site[j * nx + i] { 0.0 } else { INF };
         }
-        pass_1d(&col, &mut out, &mut v, &mut z);
-        for j in 0..ny {
-            g[j * nx + i] = out[j];
+        pass_1d(col, &mut out[..ny], v, z);
+        col.copy_from_slice(&out[..ny]);
+    });
+    // rows, in parallel, back in the grid's order
+    let mut g = vec![0f32; nx * ny];
+    g.par_chunks_mut(nx).enumerate().for_each_init(scratch, |(v, z, out), (j, row)| {
+        for (i, c) in row.iter_mut().enumerate() {
+            *c = t[i * ny + j];
         }
-    }
-    let mut row = vec![0f32; nx];
-    let mut outr = vec![0f32; nx];
-    for j in 0..ny {
-        row.copy_from_slice(&g[j * nx..(j + 1) * nx]);
-        pass_1d(&row, &mut outr, &mut v, &mut z);
-        g[j * nx..(j + 1) * nx].copy_from_slice(&outr);
-    }
-    g.iter().map(|d2| if *d2 >= INF { f32::INFINITY } else { d2.sqrt() }).collect()
+        pass_1d(row, &mut out[..nx], v, z);
+        for (c, d2) in row.iter_mut().zip(&out[..nx]) {
+            *c = if *d2 >= INF { f32::INFINITY } else { d2.sqrt() };
+        }
+    });
+    g
 }
 
 #[cfg(test)]
