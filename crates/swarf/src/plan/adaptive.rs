@@ -594,8 +594,8 @@ impl<'a, 'b> Engine<'a, 'b> {
 
     /// A lateral start `p` (material toward `dir`) moved back along the front, against the
     /// heading the pass will take, as long as it stays clear, allowed and beside the material —
-    /// but only where walls bound the front within a tool diameter both ways (a slot) and the
-    /// move ends at one; otherwise `p` itself.
+    /// but only where walls bound the front closely both ways (a slot) and the move ends at
+    /// one; otherwise `p` itself.
     fn upstream(&self, p: DVec2, dir: f64, cell: f64) -> DVec2 {
         let s = if self.climb { 1.0 } else { -1.0 };
         let h = dir + s * FRAC_PI_2;
@@ -604,13 +604,13 @@ impl<'a, 'b> Engine<'a, 'b> {
         let rho = self.r + 2.5 * cell;
         let off = -DVec2::new(dir.cos(), dir.sin());
         let ds = res.max(0.5 * cell);
-        // only where the front is short — walls within reach both ways, as in a slot: in the
-        // open the pass runs along the front anyway (and no clearance test is made: they
-        // dominate the planning time)
+        // only where the front is short — a wall within half a radius behind and one within a
+        // diameter ahead, as in a slot: in the open the pass runs along the front anyway (and
+        // no clearance test is made: they dominate the planning time)
         let wall = |sign: f64, reach: f64| {
             (1..=(reach / ds).ceil() as usize).any(|k| !self.allowed(p + back * (sign * k as f64 * ds)))
         };
-        if !wall(-1.0, 2.0 * self.r) || !wall(1.0, 2.0 * self.r) {
+        if !wall(-1.0, 0.5 * self.r) || !wall(1.0, 2.0 * self.r) {
             return p;
         }
         let mut q = p;
