@@ -6,11 +6,12 @@
 //! 1. **Find a starting point** (§4.5), in the paper's order: a *resume point* where contouring
 //!    gave way to constant engagement (the tool returns there sideways, along the wall it was
 //!    following); a *lateral entry* tangent to the remaining stock from free space or cleared
-//!    area, never tangent to the part — where walls bound the front on both sides within a tool
-//!    diameter (a slot), it is first moved back along the front to the wall behind it, so the
-//!    pass sweeps the whole front and the passes and links make trochoidal loops; a *helix* at the maximum of the distance to the walls when
-//!    that is larger than the tool radius (so a slot barely wider than the tool is entered); a
-//!    *plunge* only as the last resort, reported.
+//!    area, never tangent to the part — where walls bound the front closely on both sides (a
+//!    wall within half a radius behind the start, one within a diameter ahead: a slot), it is
+//!    first moved back along the front to the wall behind it, so that the pass sweeps the whole
+//!    front and the passes and links make trochoidal loops; a *helix* at the maximum of the
+//!    distance to the walls when that is larger than the tool radius (so a slot barely wider
+//!    than the tool is entered); a *plunge* only as the last resort, reported.
 //! 2. **Constant-engagement milling** (§4.3, Algorithm 1). The circumference of the tool is
 //!    sampled like the tool image's circumference pixels (eq. 5, 6); the engaged samples are
 //!    taken in polar form around the tool (eq. 7). For climb milling the engaged arc on the
@@ -21,7 +22,8 @@
 //!    (the flaw the paper found in Ibaraki's method). swarf then checks the step: the
 //!    engagement at the new position (front half of the tool, against the stock as it is) must
 //!    not exceed θ_ref + 3°; if it does, the direction is turned further from the material
-//!    until it does not. When no sample is engaged the ring is enlarged by up to 10 % of the
+//!    until it does not (when even the heading turned a quarter turn away reads more than
+//!    θ_ref + 10°, the pass ends there and another start takes that material). When no sample is engaged the ring is enlarged by up to 10 % of the
 //!    radius (footnote 3), which carries the tool round sharp corners of the stock; when there
 //!    is still nothing, the pass ends.
 //! 3. **Contour milling** (§4.4). A step that would bring the tool closer than its radius to the
@@ -43,9 +45,9 @@
 //! and arc-fitted within the arc tolerance; the walls are kept at `R` plus both tolerances, so
 //! neither can bring the tool into the part. A start that removes next to nothing is not tried
 //! again on that level. Links between passes stay down through cleared space (rapids at depth,
-//! fed while the tool leaves the material it touches) or lift over it (see [`super`]); because the model cuts cells by their centres, a cell counted as cut can hold
-//! material up to 0.71 cell from its centre, so landings are tested 1.5 cells and links 0.75 cell
-//! beyond the tool. What the passes leave (slivers the ring cannot see, strips along walls too
+//! fed while the tool leaves the material it touches) or lift over it (see [`super`]); because
+//! the model cuts cells by their centres, a cell counted as cut can hold material up to 0.71
+//! cell from its centre, so landings are tested 1.5 cells and links 0.75 cell beyond the tool. What the passes leave (slivers the ring cannot see, strips along walls too
 //! heavy to follow) is found exactly from the swept area and cleared by
 //! [`crate::strategy::cleanup`] passes: level curves of the wall distance, farthest first, then
 //! the wall contour itself.
@@ -1166,7 +1168,8 @@ enum EngageStep {
     Moved(DVec2, f64),
     /// The step would bring the tool into the part: contour instead.
     Wall,
-    /// No material around the tool: the pass ends.
+    /// No material around the tool, or every heading of the front half too heavy: the pass
+    /// ends.
     Done,
 }
 

@@ -414,7 +414,7 @@ impl RasterSim {
             clear = false;
             false
         });
-        clear.then(|| (t + 1e-6).min(len))
+        clear.then(|| if t > 0.0 { (t + 1e-6).min(len) } else { 0.0 })
     }
 
     /// Exact distance from the XY path to the part/fixture boundary (capped at `max`), or 0
@@ -971,5 +971,97 @@ impl RasterSim {
             }
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::{Tool, Width};
+
+    /// A 40 mm square of stock, no part, a Ø6 tool, 0.1 mm cells.
+    fn sim() -> RasterSim {
+        let job = Job {
+            name: "t".into(),
+            stock: Area::rect(-20.0, -20.0, 20.0, 20.0),
+            stock_top: 0.0,
+            part: Area::empty(),
+            part_top: 0.0,
+            fixtures: Area::empty(),
+            floor: -5.0,
+            allowance: 0.0,
+            allowance_floor: 0.0,
+            tool: Tool::flat(6.0),
+            width: Width::Stepover(0.25),
+            stepdown: None,
+            feed: 1000.0,
+            rapid_rate: 5000.0,
+            spindle_rpm: 10000.0,
+        };
+        let regions = job.regions(job.radius(), 0.0).expect("regions");
+        RasterSim::new(&job, &regions, &SimOptions { res: Some(0.1), ..Default::default() }).expect("simulator")
+    }
+
+    fn point(p: DVec2) -> Path {
+        Path::Line { a: p.extend(0.0), b: p.extend(0.0) }
+    }
+
+    #[test]
+    fn block_maxima_give_the_same_answer_as_every_cell() {
+        let mut s = sim();
+        // cut a few steps at two depths so that blocks hold several heights
+        s.cut_step(DVec2::new(-25.0, -3.0), DVec2::new(2.0, -3.0), -2.0);
+        s.cut_step(DVec2::new(2.0, -3.0), DVec2::new(6.0, 9.0), -2.0);
+        s.cut_step(DVec2::new(-25.0, 8.0), DVec2::new(-4.0, 8.0), -1.0);
+        let brute = |s: &RasterSim, p: DVec2, rho: f64| {
+            let g = s.grid;
+            let mut best = f32::NEG_INFINITY;
+            for j in 0..g.ny {
+                for i in 0..g.nx {
+                    if (g.center(i, j) - p).length() <= rho {
+                        best = best.max(s.heights()[j * g.nx + i]);
+                    }
+                }
+            }
+            best
+        };
+        let mut checked = 0;
+        for k in 0..60 {
+            let p = DVec2::new(-22.0 + 0.77 * k as f64, -15.0 + 0.53 * ((k * 7) % 60) as f64);
+            for rho in [0.3, 2.0, 3.05, 5.5] {
+                assert_eq!(s.max_height_near(&point(p), rho), brute(&s, p, rho), "at {p:?}, rho {rho}");
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 240);
+        // the block counts follow cells lowered one by one: a point cut clean reads the level
+        s.cut(&Path::Line { a: DVec3::new(10.0, 10.0, -2.0), b: DVec3::new(10.0, 10.0, -2.0) });
+        assert_eq!(s.max_height_near(&point(DVec2::new(10.0, 10.0)), 2.5), -2.0);
+    }
+
+    #[test]
+    fn leaving_distance_feeds_off_the_touched_material_and_refuses_new_material() {
+        let mut s = sim();
+        let z = -2.0;
+        // a slot from outside the stock to the middle, wider than the tool, and its last half
+        // millimetre with the planner's radius less 5 µm: the tool at its end touches the
+        // material ahead of it
+        let end = DVec2::new(0.0, 0.0);
+        s.cut_step_r(DVec2::new(-30.0, 0.0), DVec2::new(-0.5, 0.0), z, 3.2);
+        s.cut_step_r(DVec2::new(-0.5, 0.0), end, z, 2.995);
+        let margin = 0.075;
+        // back along the slot: only the material touched at the start, left behind at once
+        let back = DVec2::new(-15.0, 0.0);
+        let t = s.leaving_distance(end.extend(z), back.extend(z), margin).expect("the way back is clear");
+        assert!(t > 0.0 && t < 0.5, "{t}");
+        let rest = Path::Line { a: (end + (back - end).normalize() * t).extend(z), b: back.extend(z) };
+        assert!(s.is_clear(&rest, margin), "the rest of the way is clear");
+        assert!(!s.is_clear(&Path::Line { a: end.extend(z), b: back.extend(z) }, margin));
+        // forward or sideways: new material
+        assert!(s.leaving_distance(end.extend(z), DVec2::new(5.0, 0.0).extend(z), margin).is_none());
+        assert!(s.leaving_distance(end.extend(z), DVec2::new(0.0, 5.0).extend(z), margin).is_none());
+        // from a point in the clear: nothing touched, nothing to feed
+        let p = DVec2::new(-12.0, 0.0);
+        assert_eq!(s.leaving_distance(p.extend(z), back.extend(z), margin), Some(0.0));
     }
 }
