@@ -158,18 +158,23 @@ fn level_curves(g: &LayerGeom, params: &Params, left: &Area, step: f64) -> Vec<P
 /// Smallest turn that [`fillet_away`] rounds, radians.
 const FILLET_MIN_TURN: f64 = 5.0 * std::f64::consts::PI / 180.0;
 
-/// The turns away from the walls (radians, positive) at the corners of `ring` that
-/// [`fillet_away`] rounds.
-fn away_turns(ring: &[DVec2]) -> Vec<f64> {
+/// The corner of `ring` at vertex `i` when [`fillet_away`] rounds it: how far it turns away
+/// from the walls (radians, positive) and the unit directions of the edges in and out.
+fn away_turn(ring: &[DVec2], i: usize) -> Option<(f64, DVec2, DVec2)> {
     let n = ring.len();
-    (0..n)
-        .filter_map(|i| {
-            let (p, q, s) = (ring[(i + n - 1) % n], ring[i], ring[(i + 1) % n]);
-            let (a, b) = ((q - p).normalize_or_zero(), (s - q).normalize_or_zero());
-            let turn = -a.perp_dot(b).atan2(a.dot(b));
-            (n >= 3 && turn > FILLET_MIN_TURN && a != DVec2::ZERO && b != DVec2::ZERO).then_some(turn)
-        })
-        .collect()
+    if n < 3 {
+        return None;
+    }
+    let (p, q, s) = (ring[(i + n - 1) % n], ring[i], ring[(i + 1) % n]);
+    let (a, b) = ((q - p).normalize_or_zero(), (s - q).normalize_or_zero());
+    // (a left turn, > 0, is toward the walls)
+    let turn = -a.perp_dot(b).atan2(a.dot(b));
+    (turn > FILLET_MIN_TURN && a != DVec2::ZERO && b != DVec2::ZERO).then_some((turn, a, b))
+}
+
+/// The turns away from the walls at the corners of `ring` that [`fillet_away`] rounds.
+fn away_turns(ring: &[DVec2]) -> Vec<f64> {
+    (0..ring.len()).filter_map(|i| away_turn(ring, i).map(|(phi, _, _)| phi)).collect()
 }
 
 /// `ring` (a wall contour: the walls on its left) with every corner that turns away from the
@@ -184,13 +189,10 @@ fn fillet_away(ring: &[DVec2], rho: f64) -> Vec<DVec2> {
     let mut out = Vec::with_capacity(n + 16);
     for i in 0..n {
         let (p, q, s) = (ring[(i + n - 1) % n], ring[i], ring[(i + 1) % n]);
-        let (a, b) = ((q - p).normalize_or_zero(), (s - q).normalize_or_zero());
-        let turn = a.perp_dot(b).atan2(a.dot(b)); // > 0: left, toward the walls
-        if -turn <= FILLET_MIN_TURN || a == DVec2::ZERO || b == DVec2::ZERO {
+        let Some((phi, a, b)) = away_turn(ring, i) else {
             out.push(q);
             continue;
-        }
-        let phi = -turn;
+        };
         // tangent length of the fillet, within half of each edge
         let t = (rho * (0.5 * phi).tan()).min(0.5 * (q - p).length()).min(0.5 * (s - q).length());
         let rr = t / (0.5 * phi).tan();
