@@ -117,13 +117,12 @@ pub fn link_adaptive(
         eng.l.tp.note(format!("level {} of {}: z {:.3}", i + 1, n, z));
         eng.l.down_at = None;
         eng.level(*z);
-    }
-    // what the constant-engagement passes left (read off the material model, level by
-    // level, bottom up): clean-up passes
-    if std::env::var("SWARF_DEBUG").is_ok() {
-        eprintln!("adaptive levels done at {:.3} s", t0.elapsed().as_secs_f64());
-    }
-    for z in zs.iter().rev() {
+        if std::env::var("SWARF_DEBUG").is_ok() {
+            eprintln!("adaptive level {} done at {:.3} s", i + 1, t0.elapsed().as_secs_f64());
+        }
+        // what the constant-engagement passes left (read off the material model): clean-up
+        // passes, before the next level so that neither they nor the next level's passes cut
+        // deeper than one step-down
         let left = eng.l.sim.material_area(*z);
         if left.is_empty() {
             continue;
@@ -543,10 +542,21 @@ impl<'a, 'b> Engine<'a, 'b> {
                 if d < self.r + 0.5 * cell || d > self.r + 2.5 * cell {
                     continue;
                 }
-                let p = DVec2::new(g.x0 + (i as f64 + 0.5) * cell, g.y0 + (j as f64 + 0.5) * cell);
-                let dk = self.dk_at(p);
+                let mut p = DVec2::new(g.x0 + (i as f64 + 0.5) * cell, g.y0 + (j as f64 + 0.5) * cell);
+                let mut dk = self.dk_at(p);
                 if dk < self.r + self.margin + cell {
-                    continue;
+                    // in a channel narrower than two blocks the centres may all miss the strip
+                    // the tool can stand on: the point of the block farthest from the walls
+                    let third = cell / 3.0;
+                    let best = (-1..=1)
+                        .flat_map(|a| (-1..=1).map(move |b| p + DVec2::new(a as f64, b as f64) * third))
+                        .map(|q| (self.dk_at(q), q))
+                        .max_by(|a, b| a.0.total_cmp(&b.0))
+                        .expect("nine points");
+                    if best.0 < self.r + self.margin + 2.0 * g.res {
+                        continue;
+                    }
+                    (dk, p) = best;
                 }
                 if self.failed.iter().any(|f| (*f - p).length() < 1.5 * cell) {
                     continue;
@@ -589,7 +599,15 @@ impl<'a, 'b> Engine<'a, 'b> {
                     }
                 }
             }
-            return Some((p + u * lo, cand, dir));
+            // the pass must find the material from there (its ring, or the enlarged one of
+            // footnote 3), or it would end at once after a descent for nothing
+            let at = p + u * lo;
+            let heading = dir + if self.climb { 1.0 } else { -1.0 } * FRAC_PI_2;
+            if self.direction(at, heading).is_none() {
+                self.failed.push(cand);
+                continue;
+            }
+            return Some((at, cand, dir));
         }
         None
     }

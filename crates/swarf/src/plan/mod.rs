@@ -475,7 +475,10 @@ impl<'a> Linker<'a> {
         for k in 1..=n {
             let t = k as f64 / n as f64;
             let a = a0 + s * total * t;
-            self.push_arc(MoveKind::Entry, on(a).extend(z_from + (z - z_from) * t), c, ccw, self.ramp_feed);
+            // exactly `z` at the bottom: a last bit of rounding would print the turn at depth
+            // as a rise of 1 µm and count it outside the bore
+            let zk = if k == n { z } else { z_from + (z - z_from) * t };
+            self.push_arc(MoveKind::Entry, on(a).extend(zk), c, ccw, self.ramp_feed);
         }
         let a_end = a0 + s * total;
         self.push_arc(MoveKind::Cut, on(a_end + s * std::f64::consts::PI).extend(z), c, ccw, self.feed);

@@ -23,6 +23,19 @@ struct Prim {
     path: Path,
     fast: Fast,
     z: f64,
+    /// A disk that holds the whole sweep (centre, radius): the quick rejects of a query.
+    hull: (DVec2, f64),
+}
+
+impl Prim {
+    fn new(path: Path, z: f64, r: f64) -> Self {
+        let (lo, hi) = path.bbox(r);
+        let hull = match path {
+            Path::Line { a, b } => (0.5 * (a.truncate() + b.truncate()), 0.5 * (b - a).truncate().length() + r),
+            Path::Arc(_) => (0.5 * (lo + hi), 0.5 * (hi - lo).length()),
+        };
+        Prim { path, fast: Fast::new(&path), z, hull }
+    }
 }
 
 /// Cleared geometry of the job so far, for exact engagement queries.
@@ -107,7 +120,7 @@ impl ExactModel {
             }
             let id = self.prims.len() as u32;
             let pp = if len < 1e-12 { path.sub(0.0, 0.0) } else { p };
-            self.prims.push(Prim { path: pp, fast: Fast::new(&pp), z });
+            self.prims.push(Prim::new(pp, z, self.r));
             self.stamp.push(0);
             let (lo, hi) = p.bbox(self.r);
             if let Some((x0, x1, y0, y1)) = self.cell_range(lo, hi) {
@@ -135,6 +148,7 @@ impl ExactModel {
             return 0.0;
         }
         let base = dir.y.atan2(dir.x);
+        let u = dir.normalize();
         // 1. front half inside the stock
         self.angles.clear();
         self.angles.push(-FRAC_PI_2);
@@ -176,8 +190,14 @@ impl ExactModel {
                             continue;
                         }
                         self.stamp[k] = self.query;
-                        let p = self.prims[k];
+                        let p = &self.prims[k];
                         if p.z > zq {
+                            continue;
+                        }
+                        // wholly behind the front half, or beyond the ring
+                        let (hc, hr) = p.hull;
+                        let v = hc - c;
+                        if v.dot(u) + hr < 0.0 || v.length() - hr > rho {
                             continue;
                         }
                         covered_intervals(&p.path, &p.fast, rr, c, rho, base, &mut self.angles, &mut self.covered);

@@ -632,17 +632,33 @@ impl RasterSim {
     /// Front-half engagement (degrees) by the pixel ring at `c` moving along `dir`, against the
     /// stock as it is (no exclusion of the current move: for planning, where the stock is cut
     /// step by step).
+    ///
+    /// Where the tool runs within half a pixel of a wall, the ring (half a pixel outside the
+    /// tool) reads the pixels beyond the wall over a wedge of about 2·acos(R / (R + res/2))
+    /// round it (16° at res = D/100): outside a pocket's stock it would count no material
+    /// there although the strip between the tool and the wall is uncut (contour milling along
+    /// a wall read 5–8° low, and up to 25° low at an inside corner, against the exact
+    /// engagement), and on a part inside the stock it would count the part. A ring point that
+    /// falls on the part or outside the stock is therefore read half a pixel inside the tool
+    /// instead (within 1–2° of the exact engagement along walls).
     pub fn front_engagement(&self, c: DVec2, z: f64, dir: DVec2) -> f64 {
         let zq = (z + self.eps) as f32;
+        let inward = (self.r - 0.5 * self.grid.res) / (self.r + 0.5 * self.grid.res);
         let mut hit = 0usize;
         for off in &self.circ {
             if off.dot(dir) < 0.0 {
                 continue;
             }
-            let q = c + *off;
-            if let Some((i, j)) = self.grid.cell_of(q)
-                && self.s[j * self.grid.nx + i] > zq
-            {
+            let Some((i, j)) = self.grid.cell_of(c + *off) else { continue };
+            let k = j * self.grid.nx + i;
+            let material = if self.p[k] > zq || self.s[k] == f32::NEG_INFINITY {
+                // the ring, half a pixel outside the tool, has crossed into the part or out of
+                // the stock: read half a pixel inside the tool instead (see above)
+                self.grid.cell_of(c + *off * inward).is_some_and(|(i, j)| self.s[j * self.grid.nx + i] > zq)
+            } else {
+                self.s[k] > zq
+            };
+            if material {
                 hit += 1;
             }
         }
@@ -981,11 +997,16 @@ mod tests {
 
     /// A 40 mm square of stock, no part, a Ø6 tool, 0.1 mm cells.
     fn sim() -> RasterSim {
+        sim_with(Area::empty())
+    }
+
+    /// The same with a part.
+    fn sim_with(part: Area) -> RasterSim {
         let job = Job {
             name: "t".into(),
             stock: Area::rect(-20.0, -20.0, 20.0, 20.0),
             stock_top: 0.0,
-            part: Area::empty(),
+            part,
             part_top: 0.0,
             fixtures: Area::empty(),
             floor: -5.0,
@@ -1063,5 +1084,38 @@ mod tests {
         // from a point in the clear: nothing touched, nothing to feed
         let p = DVec2::new(-12.0, 0.0);
         assert_eq!(s.leaving_distance(p.extend(z), back.extend(z), margin), Some(0.0));
+    }
+
+    #[test]
+    fn front_engagement_along_a_wall_reads_the_strip_beside_it() {
+        // a wall at x = 5: the part beyond it, either outside the stock (a pocket) or inside
+        // it; a pass along x = -0.005 has left a strip 2 mm wide before the wall; the tool
+        // follows the wall 5 µm from it, cutting the strip on its right: the arc in the
+        // material is acos(1 - 2/3) = 70.5°
+        let pocket = {
+            let mut s = sim_with(Area::rect(5.0, -30.0, 30.0, 30.0));
+            s.s.iter_mut().zip(&s.p).for_each(|(h, p)| {
+                if *p > -5.0 {
+                    *h = f32::NEG_INFINITY;
+                }
+            });
+            s
+        };
+        for (what, mut s) in
+            [("outside the stock", pocket), ("inside the stock", sim_with(Area::rect(5.0, -20.0, 20.0, 20.0)))]
+        {
+            let z = -1.0;
+            let x = 5.0 - 3.0 - 0.005;
+            s.cut_step(DVec2::new(x - 2.0, -25.0), DVec2::new(x - 2.0, 25.0), z);
+            s.cut_step(DVec2::new(x, -25.0), DVec2::new(x, 0.0), z);
+            let expect = (1.0f64 - 2.0 / 3.0).acos().to_degrees();
+            // (a step of the planner, 0.1·D, and more)
+            for y in [0.6, 1.2, 2.0] {
+                let e = s.front_engagement(DVec2::new(x, y), z, DVec2::Y);
+                // (the ring half a pixel outside the tool reaches into the wall: read there,
+                // the wedge round it would be lost or the part counted, 8° either way)
+                assert!((e - expect).abs() < 2.0, "part {what}, at y {y}: {e:.1}° against {expect:.1}°");
+            }
+        }
     }
 }
