@@ -9,7 +9,11 @@
 //!    area, never tangent to the part — where walls bound the front closely on both sides (a
 //!    wall within half a radius behind the start, one within a diameter ahead: a slot), it is
 //!    first moved back along the front to the wall behind it, so that the pass sweeps the whole
-//!    front and the passes and links make trochoidal loops; a *helix* at the maximum of the
+//!    front and the passes and links make trochoidal loops. Candidates are the centres of
+//!    coarse blocks (a quarter radius) a little more than a radius from the material; when
+//!    none is left on a level, the search runs once more with any point of a block (channels
+//!    narrower than two blocks); a start from which the ring finds no material is not
+//!    taken. Then a *helix* at the maximum of the
 //!    distance to the walls when that is larger than the tool radius (so a slot barely wider
 //!    than the tool is entered); a *plunge* only as the last resort, reported.
 //! 2. **Constant-engagement milling** (§4.3, Algorithm 1). The circumference of the tool is
@@ -50,7 +54,8 @@
 //! cell from its centre, so landings are tested 1.5 cells and links 0.75 cell beyond the tool. What the passes leave (slivers the ring cannot see, strips along walls too
 //! heavy to follow) is found exactly from the swept area and cleared by
 //! [`crate::strategy::cleanup`] passes: level curves of the wall distance, farthest first, then
-//! the wall contour itself.
+//! the wall contour itself — after each level, before the next one, so that neither they nor
+//! the next level's passes cut two step-downs at once.
 //!
 //! The planner cuts its model with the radius less the largest distance between its steps and
 //! the emitted program (Douglas–Peucker, arc fitting and the post's rounding, 5 µm by default):
@@ -306,6 +311,9 @@ struct Engine<'a, 'b> {
     boost_ring: Vec<DVec2>,
     z: f64,
     why: &'static str,
+    /// Lateral starts may stand anywhere in a coarse block, not only at its centre (set when
+    /// the centres give no start on a level).
+    relaxed: bool,
 }
 
 impl<'a, 'b> Engine<'a, 'b> {
@@ -340,6 +348,7 @@ impl<'a, 'b> Engine<'a, 'b> {
             boost_ring,
             z: 0.0,
             why: "",
+            relaxed: false,
         }
     }
 
@@ -375,6 +384,7 @@ impl<'a, 'b> Engine<'a, 'b> {
         self.z = z;
         self.resume.clear();
         self.failed.clear();
+        self.relaxed = false;
         self.coarse.clear();
         self.l.sim.begin_level(z);
         let mut passes = Vec::new();
@@ -382,7 +392,18 @@ impl<'a, 'b> Engine<'a, 'b> {
         let mut idle = 0;
         while self.l.sim.reach_left() > 0 {
             let before = self.l.sim.reach_left();
-            let Some(start) = self.find_start() else { break };
+            let Some(start) = self.find_start().or_else(|| {
+                // no start left: look again, lateral starts anywhere in a block (channels
+                // narrower than two blocks, whose centres may all miss the strip the tool can
+                // stand on); done at the end only, so that open areas keep their order
+                if self.relaxed {
+                    return None;
+                }
+                self.relaxed = true;
+                self.find_start()
+            }) else {
+                break;
+            };
             let kind = match &start {
                 Start::Resume { .. } => "resume",
                 Start::Lateral { .. } => "lateral",
@@ -545,6 +566,9 @@ impl<'a, 'b> Engine<'a, 'b> {
                 let mut p = DVec2::new(g.x0 + (i as f64 + 0.5) * cell, g.y0 + (j as f64 + 0.5) * cell);
                 let mut dk = self.dk_at(p);
                 if dk < self.r + self.margin + cell {
+                    if !self.relaxed {
+                        continue;
+                    }
                     // in a channel narrower than two blocks the centres may all miss the strip
                     // the tool can stand on: the point of the block farthest from the walls
                     let third = cell / 3.0;
