@@ -481,7 +481,8 @@ impl<'a, 'b> Engine<'a, 'b> {
             }
         }
         // 2. lateral entry tangent to the stock from free or cleared space
-        if let Some((at, from, dir)) = self.lateral() {
+        // (the nearest 64 candidates first; all of them before a helix)
+        if let Some((at, from, dir)) = self.lateral(64).or_else(|| self.lateral(usize::MAX)) {
             return Some(Start::Lateral { at, from, dir });
         }
         // 3. helix at the farthest point from the walls that has material, 4. plunge
@@ -509,7 +510,7 @@ impl<'a, 'b> Engine<'a, 'b> {
 
     /// A tool centre that is clear, allowed and within a few cells of remaining material,
     /// nearest to where the tool is; with the direction toward the material.
-    fn lateral(&mut self) -> Option<(DVec2, DVec2, f64)> {
+    fn lateral(&mut self, tries: usize) -> Option<(DVec2, DVec2, f64)> {
         let g = self.l.sim.grid;
         // coarse grid: blocks of `f` cells, a block has material if any of its cells does
         let f = ((self.r / 4.0) / g.res).floor().max(1.0) as usize;
@@ -592,7 +593,7 @@ impl<'a, 'b> Engine<'a, 'b> {
             }
         }
         cands.sort_by(|a, b| a.0.total_cmp(&b.0));
-        for (_, p) in cands.into_iter().take(64) {
+        for (_, p) in cands.into_iter().take(tries) {
             if !self.clear(p) || !self.allowed(p) {
                 continue;
             }
