@@ -13,9 +13,9 @@
 //!    coarse blocks (a quarter radius) a little more than a radius from the material; when
 //!    none is left on a level, the search runs once more with any point of a block (channels
 //!    narrower than two blocks); a start from which the ring finds no material is not
-//!    taken. Then a *helix* at the maximum of the
-//!    distance to the walls when that is larger than the tool radius (so a slot barely wider
-//!    than the tool is entered); a *plunge* only as the last resort, reported.
+//!    taken. Then a *helix* at the maximum of the distance to the walls when that is larger
+//!    than the tool radius (so a slot barely wider than the tool is entered); a *plunge* only
+//!    as the last resort, reported.
 //! 2. **Constant-engagement milling** (§4.3, Algorithm 1). The circumference of the tool is
 //!    sampled like the tool image's circumference pixels (eq. 5, 6); the engaged samples are
 //!    taken in polar form around the tool (eq. 7). For climb milling the engaged arc on the

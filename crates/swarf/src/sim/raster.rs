@@ -997,14 +997,14 @@ mod tests {
 
     /// A 40 mm square of stock, no part, a Ø6 tool, 0.1 mm cells.
     fn sim() -> RasterSim {
-        sim_with(Area::empty())
+        sim_with(Area::rect(-20.0, -20.0, 20.0, 20.0), Area::empty())
     }
 
-    /// The same with a part.
-    fn sim_with(part: Area) -> RasterSim {
+    /// The same with another stock and a part.
+    fn sim_with(stock: Area, part: Area) -> RasterSim {
         let job = Job {
             name: "t".into(),
-            stock: Area::rect(-20.0, -20.0, 20.0, 20.0),
+            stock,
             stock_top: 0.0,
             part,
             part_top: 0.0,
@@ -1092,18 +1092,9 @@ mod tests {
         // it; a pass along x = -0.005 has left a strip 2 mm wide before the wall; the tool
         // follows the wall 5 µm from it, cutting the strip on its right: the arc in the
         // material is acos(1 - 2/3) = 70.5°
-        let pocket = {
-            let mut s = sim_with(Area::rect(5.0, -30.0, 30.0, 30.0));
-            s.s.iter_mut().zip(&s.p).for_each(|(h, p)| {
-                if *p > -5.0 {
-                    *h = f32::NEG_INFINITY;
-                }
-            });
-            s
-        };
-        for (what, mut s) in
-            [("outside the stock", pocket), ("inside the stock", sim_with(Area::rect(5.0, -20.0, 20.0, 20.0)))]
-        {
+        let pocket = sim_with(Area::rect(-20.0, -20.0, 5.0, 20.0), Area::rect(5.0, -30.0, 30.0, 30.0));
+        let island = sim_with(Area::rect(-20.0, -20.0, 20.0, 20.0), Area::rect(5.0, -20.0, 20.0, 20.0));
+        for (what, mut s) in [("outside the stock", pocket), ("inside the stock", island)] {
             let z = -1.0;
             let x = 5.0 - 3.0 - 0.005;
             s.cut_step(DVec2::new(x - 2.0, -25.0), DVec2::new(x - 2.0, 25.0), z);
