@@ -504,8 +504,12 @@ impl<'a, 'b> Engine<'a, 'b> {
     /// cut by their centres, so a cell counted as cut can still hold material up to half a
     /// cell from its centre: the test reaches one and a half cells further.
     fn clear(&self, p: DVec2) -> bool {
-        let rho = self.r + crate::strategy::LANDING_MARGIN + 1.5 * self.l.sim.grid.res;
-        self.l.top_near(p, rho) <= self.z + 0.01
+        self.l.top_near(p, self.landing_reach()) <= self.z + 0.01
+    }
+
+    /// How far from a landing point the material is looked for (see [`Self::clear`]).
+    fn landing_reach(&self) -> f64 {
+        self.r + crate::strategy::LANDING_MARGIN + 1.5 * self.l.sim.grid.res
     }
 
     /// A tool centre that is clear, allowed and within a few cells of remaining material,
@@ -953,7 +957,7 @@ impl<'a, 'b> Engine<'a, 'b> {
             self.l.link_clear(p, z, t);
             return;
         }
-        let top = self.l.top_near(p, self.r + crate::strategy::LANDING_MARGIN + 1.5 * self.l.sim.grid.res);
+        let top = self.l.top_near(p, self.landing_reach());
         let h = (z + self.l.params.approach).max(if top.is_finite() { top + self.l.params.approach } else { z });
         self.l.travel(p, h);
         self.l.push_line(MoveKind::Descend, p.extend(z), self.l.entry_feed);
