@@ -105,9 +105,9 @@ mod tests {
         let (nx, ny) = (37, 23);
         let mut site = vec![false; nx * ny];
         let mut s: u64 = 7;
-        for k in 0..nx * ny {
+        for v in site.iter_mut() {
             s = s.wrapping_mul(6364136223846793005).wrapping_add(1);
-            site[k] = (s >> 60) == 0;
+            *v = (s >> 60) == 0;
         }
         let d = distance(&site, nx, ny);
         for j in 0..ny {
