@@ -27,9 +27,9 @@
 //!    engagement at the new position (front half of the tool, against the stock as it is) must
 //!    not exceed θ_ref + 3°; if it does, the direction is turned further from the material
 //!    until it does not (when even the heading turned a quarter turn away reads more than
-//!    θ_ref + 10°, the pass ends there and another start takes that material). When no sample is engaged the ring is enlarged by up to 10 % of the
-//!    radius (footnote 3), which carries the tool round sharp corners of the stock; when there
-//!    is still nothing, the pass ends.
+//!    θ_ref + 10°, the pass ends there and another start takes that material). When no sample
+//!    is engaged the ring is enlarged by up to 10 % of the radius (footnote 3), which carries
+//!    the tool round sharp corners of the stock; when there is still nothing, the pass ends.
 //! 3. **Contour milling** (§4.4). A step that would bring the tool closer than its radius to the
 //!    part puts it on the *offset contour* (the walls grown by the radius) and it follows that
 //!    contour, keeping the milling direction. It returns to constant engagement when the
@@ -51,11 +51,12 @@
 //! again on that level. Links between passes stay down through cleared space (rapids at depth,
 //! fed while the tool leaves the material it touches) or lift over it (see [`super`]); because
 //! the model cuts cells by their centres, a cell counted as cut can hold material up to 0.71
-//! cell from its centre, so landings are tested 1.5 cells and links 0.75 cell beyond the tool. What the passes leave (slivers the ring cannot see, strips along walls too
-//! heavy to follow) is found exactly from the swept area and cleared by
-//! [`crate::strategy::cleanup`] passes: level curves of the wall distance, farthest first, then
-//! the wall contour itself — after each level, before the next one, so that neither they nor
-//! the next level's passes cut two step-downs at once.
+//! cell from its centre, so landings are tested 1.5 cells and links 0.75 cell beyond the tool.
+//! What the passes leave (slivers the ring cannot see, strips along walls too heavy to follow)
+//! is found exactly from the swept area and cleared by [`crate::strategy::cleanup`] passes:
+//! level curves of the wall distance, farthest first, then the wall contour itself — after
+//! each level, before the next one, so that neither they nor the next level's passes cut two
+//! step-downs at once.
 //!
 //! The planner cuts its model with the radius less the largest distance between its steps and
 //! the emitted program (Douglas–Peucker, arc fitting and the post's rounding, 5 µm by default):
@@ -115,8 +116,7 @@ pub fn link_adaptive(
     let first = geom.centres.bounds().map_or(DVec2::ZERO, |(lo, _)| lo);
     let mut l = Linker::new(job, regions, params, sim_opts, first)?;
     l.clear_margin = 0.75 * l.sim.grid.res;
-    let margin = geom.wall_level - job.radius();
-    let mut eng = Engine::new(&mut l, job, geom, params, margin);
+    let mut eng = Engine::new(&mut l, job, geom, params);
     let n = zs.len();
     for (i, z) in zs.iter().enumerate() {
         eng.l.tp.note(format!("level {} of {}: z {:.3}", i + 1, n, z));
@@ -317,12 +317,13 @@ struct Engine<'a, 'b> {
 }
 
 impl<'a, 'b> Engine<'a, 'b> {
-    fn new(l: &'b mut Linker<'a>, job: &Job, geom: &LayerGeom, params: &Params, margin: f64) -> Self {
+    fn new(l: &'b mut Linker<'a>, job: &Job, geom: &LayerGeom, params: &Params) -> Self {
         let r = job.radius();
+        // (the walls of the layer geometry are grown by the radius and this)
+        let margin = geom.wall_level - r;
         let grid = l.sim.grid;
         let keep = l.sim.keep_mask();
         let dk: Vec<f32> = edt::distance(&keep, grid.nx, grid.ny).iter().map(|d| d * grid.res as f32).collect();
-        debug_assert!((geom.wall_level - (r + margin)).abs() < 1e-12);
         let walls = Walls::new(&geom.walls, (2.0 * r).max(1.0));
         let theta = job.width.engagement_deg();
         let step = (0.1 * job.tool.diameter).max(2.0 * grid.res);

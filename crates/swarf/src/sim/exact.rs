@@ -29,10 +29,12 @@ struct Prim {
 
 impl Prim {
     fn new(path: Path, z: f64, r: f64) -> Self {
-        let (lo, hi) = path.bbox(r);
         let hull = match path {
             Path::Line { a, b } => (0.5 * (a.truncate() + b.truncate()), 0.5 * (b - a).truncate().length() + r),
-            Path::Arc(_) => (0.5 * (lo + hi), 0.5 * (hi - lo).length()),
+            Path::Arc(_) => {
+                let (lo, hi) = path.bbox(r);
+                (0.5 * (lo + hi), 0.5 * (hi - lo).length())
+            }
         };
         Prim { path, fast: Fast::new(&path), z, hull }
     }
