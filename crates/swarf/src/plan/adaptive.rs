@@ -558,13 +558,27 @@ impl<'a, 'b> Engine<'a, 'b> {
             return None;
         }
         let mat = &self.coarse;
-        let dm = edt::distance(mat, cx, cy);
         let cell = f as f64 * g.res;
+        // the distance to the material is needed only up to `r + 2.5 cell`: the transform runs
+        // over the blocks with material and that much around them (late in a level, a few
+        // scraps of a large grid)
+        let (i0, i1, j0, j1) = {
+            let k = ((self.r + 2.5 * cell) / cell).ceil() as usize + 1;
+            let (mut i0, mut i1, mut j0, mut j1) = (cx, 0, cy, 0);
+            for (n, _) in mat.iter().enumerate().filter(|(_, m)| **m) {
+                let (i, j) = (n % cx, n / cx);
+                (i0, i1, j0, j1) = (i0.min(i), i1.max(i), j0.min(j), j1.max(j));
+            }
+            (i0.saturating_sub(k), (i1 + k).min(cx - 1), j0.saturating_sub(k), (j1 + k).min(cy - 1))
+        };
+        let (sx, sy) = (i1 - i0 + 1, j1 - j0 + 1);
+        let sub: Vec<bool> = (j0..=j1).flat_map(|j| mat[j * cx + i0..=j * cx + i1].iter().copied()).collect();
+        let dm = edt::distance(&sub, sx, sy);
         let cur = self.l.tp.end().truncate();
         let mut cands: Vec<(f64, DVec2)> = Vec::new();
-        for j in 0..cy {
-            for i in 0..cx {
-                let d = dm[j * cx + i] as f64 * cell;
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let d = dm[(j - j0) * sx + (i - i0)] as f64 * cell;
                 // block centres a little more than a radius from the material
                 if d < self.r + 0.5 * cell || d > self.r + 2.5 * cell {
                     continue;

@@ -106,6 +106,7 @@ pub struct Rest {
 fn visit_above(
     grid: &Grid,
     h: &[f32],
+    blocks: Option<(&[f32], usize)>,
     path: &Path,
     rho: f64,
     above: f64,
@@ -113,32 +114,100 @@ fn visit_above(
 ) {
     let (lo, hi) = path.bbox(rho);
     let Some((i0, i1, j0, j1)) = grid.range(lo, hi) else { return };
-    let flat = path.is_flat().then(|| (Fast::new(path), path.z_range().0));
+    let (z0, z1) = path.z_range();
+    let zmin = z0.min(z1);
+    let flat = path.is_flat().then(|| (Fast::new(path), z0));
     for j in j0..=j1 {
-        for i in i0..=i1 {
-            let k = j * grid.nx + i;
-            let v = h[k];
-            if v == f32::NEG_INFINITY {
+        let Some((i0, i1)) = row_columns(grid, path, rho, j, i0, i1) else { continue };
+        for (i0, i1) in block_runs(i0, i1) {
+            // a block whose highest cell is not high enough holds nothing to visit
+            if let Some((bmax, nbx)) = blocks
+                && (bmax[(j / BLOCK) * nbx + i0 / BLOCK] as f64) - zmin <= above
+            {
                 continue;
             }
-            let q = grid.center(i, j);
-            let z = match &flat {
-                Some((fast, z)) => {
-                    if (v as f64) - *z <= above || fast.distance(q) > rho {
-                        continue;
-                    }
-                    *z
+            for i in i0..=i1 {
+                let k = j * grid.nx + i;
+                let v = h[k];
+                if v == f32::NEG_INFINITY {
+                    continue;
                 }
-                None => match path.reach_zmin(q, rho) {
-                    Some(z) if (v as f64) - z > above => z,
-                    _ => continue,
-                },
-            };
-            if !f(k, q, z) {
-                return;
+                let q = grid.center(i, j);
+                let z = match &flat {
+                    Some((fast, z)) => {
+                        if (v as f64) - *z <= above || fast.distance(q) > rho {
+                            continue;
+                        }
+                        *z
+                    }
+                    None => match path.reach_zmin(q, rho) {
+                        Some(z) if (v as f64) - z > above => z,
+                        _ => continue,
+                    },
+                };
+                if !f(k, q, z) {
+                    return;
+                }
             }
         }
     }
+}
+
+/// The columns `i0..=i1` split where the blocks of [`BLOCK`] cells begin, in order.
+#[inline]
+fn block_runs(i0: usize, i1: usize) -> impl Iterator<Item = (usize, usize)> {
+    let mut i = i0;
+    std::iter::from_fn(move || {
+        (i <= i1).then(|| {
+            let e = ((i / BLOCK + 1) * BLOCK - 1).min(i1);
+            let run = (i, e);
+            i = e + 1;
+            run
+        })
+    })
+}
+
+/// The x-range, on the row at height `y`, of the points within `r` of the segment `ab` (a
+/// stadium), when the row crosses it: the union of the two end disks' spans and of the band
+/// between them (the stadium is convex, so its extremes on a row lie on those).
+#[inline]
+fn stadium_span(a: DVec2, b: DVec2, r: f64, y: f64) -> Option<(f64, f64)> {
+    let mut xlo = f64::INFINITY;
+    let mut xhi = f64::NEG_INFINITY;
+    for c in [a, b] {
+        let dy = y - c.y;
+        let w2 = r * r - dy * dy;
+        if w2 >= 0.0 {
+            xlo = xlo.min(c.x - w2.sqrt());
+            xhi = xhi.max(c.x + w2.sqrt());
+        }
+    }
+    let ab = b - a;
+    if ab.y.abs() > 1e-12 || ab.x.abs() > 1e-12 {
+        let n = DVec2::new(-ab.y, ab.x).normalize();
+        for sgn in [-1.0, 1.0] {
+            let off = n * (r * sgn);
+            let (p, q) = (a + off, b + off);
+            if (p.y - y) * (q.y - y) <= 0.0 && (q.y - p.y).abs() > 1e-12 {
+                let x = p.x + (y - p.y) / (q.y - p.y) * (q.x - p.x);
+                xlo = xlo.min(x);
+                xhi = xhi.max(x);
+            }
+        }
+    }
+    (xlo <= xhi).then_some((xlo, xhi))
+}
+
+/// The columns `i0..=i1` a scan of the row `j` must visit for a path within `rho` (its box's
+/// columns, narrowed for a straight move to its stadium and a cell to spare either side: a
+/// long diagonal link would otherwise scan its whole bounding box, millions of cells).
+fn row_columns(grid: &Grid, path: &Path, rho: f64, j: usize, i0: usize, i1: usize) -> Option<(usize, usize)> {
+    let Path::Line { a, b } = path else { return Some((i0, i1)) };
+    let y = grid.y0 + (j as f64 + 0.5) * grid.res;
+    let (lo, hi) = stadium_span(a.truncate(), b.truncate(), rho, y)?;
+    let lo = ((lo - grid.x0) / grid.res - 1.5).floor().max(i0 as f64);
+    let hi = ((hi - grid.x0) / grid.res + 0.5).ceil().min(i1 as f64);
+    (lo <= hi).then_some((lo as usize, hi as usize))
 }
 
 /// The raster simulator.
@@ -380,7 +449,7 @@ impl RasterSim {
     /// along `path` (checked with the full radius plus `margin`).
     pub fn is_clear(&self, path: &Path, margin: f64) -> bool {
         let mut clear = true;
-        visit_above(&self.grid, &self.s, path, self.r + margin, self.eps, |_, _, _| {
+        visit_above(&self.grid, &self.s, Some((&self.bmax, self.nbx)), path, self.r + margin, self.eps, |_, _, _| {
             clear = false;
             false
         });
@@ -401,7 +470,7 @@ impl RasterSim {
         let u = if len > 1e-12 { (b2 - a2) / len } else { DVec2::ZERO };
         let mut clear = true;
         let mut t: f64 = 0.0;
-        visit_above(&self.grid, &self.s, &path, rho, self.eps, |k, q, _| {
+        visit_above(&self.grid, &self.s, Some((&self.bmax, self.nbx)), &path, rho, self.eps, |k, q, _| {
             if (q - a2).length() <= rho && self.s[k] as f64 > a.z + self.eps {
                 // the points of the line within `rho` of q end at its projection plus the
                 // half chord
@@ -446,24 +515,33 @@ impl RasterSim {
         let r = self.r;
         let (lo, hi) = path.bbox(r);
         if let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) {
-            let flat = path.is_flat().then(|| (Fast::new(path), path.z_range().0 as f32));
+            let (z0, z1) = path.z_range();
+            let zmin = z0.min(z1) as f32;
+            let flat = path.is_flat().then(|| (Fast::new(path), z0 as f32));
             for j in j0..=j1 {
-                for i in i0..=i1 {
-                    let k = j * self.grid.nx + i;
-                    let h = self.s[k];
-                    if h == f32::NEG_INFINITY {
+                let Some((i0, i1)) = row_columns(&self.grid, path, r, j, i0, i1) else { continue };
+                for (i0, i1) in block_runs(i0, i1) {
+                    // nothing in a block stands above the path's lowest point: nothing to cut
+                    if self.bmax[(j / BLOCK) * self.nbx + i0 / BLOCK] <= zmin {
                         continue;
                     }
-                    let q = self.grid.center(i, j);
-                    let z = if let Some((f, z)) = &flat {
-                        if *z < h && f.distance(q) <= r { *z } else { continue }
-                    } else if let Some(z) = path.reach_zmin(q, r) {
-                        let z = z as f32;
-                        if z < h { z } else { continue }
-                    } else {
-                        continue;
-                    };
-                    self.lower(k, z);
+                    for i in i0..=i1 {
+                        let k = j * self.grid.nx + i;
+                        let h = self.s[k];
+                        if h == f32::NEG_INFINITY {
+                            continue;
+                        }
+                        let q = self.grid.center(i, j);
+                        let z = if let Some((f, z)) = &flat {
+                            if *z < h && f.distance(q) <= r { *z } else { continue }
+                        } else if let Some(z) = path.reach_zmin(q, r) {
+                            let z = z as f32;
+                            if z < h { z } else { continue }
+                        } else {
+                            continue;
+                        };
+                        self.lower(k, z);
+                    }
                 }
             }
         }
@@ -548,36 +626,13 @@ impl RasterSim {
         let inv = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
         for j in j0..=j1 {
             let y = self.grid.y0 + (j as f64 + 0.5) * res;
-            // x-range of the stadium on this row: the union of the two disks' spans and the
-            // band between them, found from the segment distance at the row's extremes
-            let span = |c: DVec2| {
-                let dy = y - c.y;
+            // x-range of the stadium on this row
+            let Some((xlo, xhi)) = stadium_span(a, b, r, y) else { continue };
+            let sa = {
+                let dy = y - a.y;
                 let w2 = r * r - dy * dy;
-                if w2 >= 0.0 { Some((c.x - w2.sqrt(), c.x + w2.sqrt())) } else { None }
+                if w2 >= 0.0 { Some((a.x - w2.sqrt(), a.x + w2.sqrt())) } else { None }
             };
-            let (sa, sb) = (span(a), span(b));
-            let mut xlo = f64::INFINITY;
-            let mut xhi = f64::NEG_INFINITY;
-            for s in [sa, sb].into_iter().flatten() {
-                xlo = xlo.min(s.0);
-                xhi = xhi.max(s.1);
-            }
-            // the band of the stadium between the disks
-            if ab.y.abs() > 1e-12 || ab.x.abs() > 1e-12 {
-                let n = DVec2::new(-ab.y, ab.x).normalize();
-                for sgn in [-1.0, 1.0] {
-                    let off = n * (r * sgn);
-                    let (p, q) = (a + off, b + off);
-                    if (p.y - y) * (q.y - y) <= 0.0 && (q.y - p.y).abs() > 1e-12 {
-                        let x = p.x + (y - p.y) / (q.y - p.y) * (q.x - p.x);
-                        xlo = xlo.min(x);
-                        xhi = xhi.max(x);
-                    }
-                }
-            }
-            if xlo > xhi {
-                continue;
-            }
             let i0 = (((xlo - self.grid.x0) / res) - 0.5).ceil().max(0.0) as i64;
             let i1 = (((xhi - self.grid.x0) / res) - 0.5).floor().min(nx as f64 - 1.0) as i64;
             // cells inside the disk at `a` were cut by the previous step (or are about to be
@@ -741,7 +796,7 @@ impl RasterSim {
         let rr = self.r - self.tol;
         let mut worst = 0.0f64;
         let mut at = path.at(0.0);
-        visit_above(&self.grid, &self.p, path, rr, self.tol, |k, q, z| {
+        visit_above(&self.grid, &self.p, None, path, rr, self.tol, |k, q, z| {
             let d = self.p[k] as f64 - z;
             if d > worst {
                 worst = d;
@@ -818,7 +873,7 @@ impl RasterSim {
                 // a rapid must not touch uncut material
                 let mut worst = 0.0f64;
                 let mut at = m.to;
-                visit_above(&self.grid, &self.s, &path, self.r - self.tol, self.eps, |k, q, z| {
+                visit_above(&self.grid, &self.s, Some((&self.bmax, self.nbx)), &path, self.r - self.tol, self.eps, |k, q, z| {
                     let d = self.s[k] as f64 - z;
                     if d > worst {
                         worst = d;
@@ -1058,6 +1113,43 @@ mod tests {
         // the block counts follow cells lowered one by one: a point cut clean reads the level
         s.cut(&Path::Line { a: DVec3::new(10.0, 10.0, -2.0), b: DVec3::new(10.0, 10.0, -2.0) });
         assert_eq!(s.max_height_near(&point(DVec2::new(10.0, 10.0)), 2.5), -2.0);
+    }
+
+    #[test]
+    fn cut_lowers_exactly_the_cells_within_the_radius_of_the_move() {
+        // the scan is narrowed to each row's stadium and skips blocks below the move: it must
+        // lower the same cells as a test of every cell of the grid
+        let mut s = sim();
+        s.cut_step(DVec2::new(-25.0, 4.0), DVec2::new(25.0, 4.0), -1.0);
+        let r = s.radius();
+        let moves = [
+            (DVec3::new(-18.0, -17.0, -2.0), DVec3::new(16.0, 15.5, -2.0)),
+            (DVec3::new(12.0, -16.0, -1.5), DVec3::new(-14.0, 11.0, -1.5)),
+            (DVec3::new(-5.0, -18.0, -0.5), DVec3::new(-4.9, 18.0, -0.5)),
+            (DVec3::new(3.0, 2.0, -3.0), DVec3::new(3.0, 2.0, -3.0)),
+            // a ramp: not flat
+            (DVec3::new(-16.0, 12.0, 0.0), DVec3::new(15.0, -3.0, -2.5)),
+        ];
+        for (a, b) in moves {
+            let before = s.heights().to_vec();
+            let path = Path::Line { a, b };
+            s.cut(&path);
+            let g = s.grid;
+            let mut lowered = 0;
+            for j in 0..g.ny {
+                for i in 0..g.nx {
+                    let k = j * g.nx + i;
+                    let want = match path.reach_zmin(g.center(i, j), r) {
+                        Some(z) if (z as f32) < before[k] && before[k] > f32::NEG_INFINITY => z as f32,
+                        _ => before[k],
+                    };
+                    let got = s.heights()[k];
+                    assert!(got == want || (got - want).abs() < 1e-5, "{a:?}→{b:?} at cell ({i}, {j}): {got} vs {want}");
+                    lowered += usize::from(s.heights()[k] < before[k]);
+                }
+            }
+            assert!(lowered > 100, "{a:?}→{b:?} lowered {lowered} cells");
+        }
     }
 
     #[test]
