@@ -96,6 +96,11 @@ const CONTOUR_SLACK_DEG: f64 = 5.0;
 /// Engagement above the reference at which a constant-engagement step that cannot turn
 /// further from the material is not taken, degrees.
 const HEAVY_DEG: f64 = 10.0;
+/// The heading search of a constant-engagement step stops when the heading that does not exceed
+/// the reference reads within this of it (about a pixel of the ring: 360° / 2π(R/res + ½))…
+const SETTLE_DEG: f64 = 1.5;
+/// …or when its bracket is narrower than this (radians; 0.7°).
+const BRACKET_RAD: f64 = 0.7 * std::f64::consts::PI / 180.0;
 /// Engagement below which contouring counts as cutting air, degrees.
 const AIR_DEG: f64 = 3.0;
 /// Degrees skipped at the tool's side when looking for the engaged arc (eq. 8).
@@ -1095,14 +1100,37 @@ impl<'a, 'b> Engine<'a, 'b> {
                 }
                 alpha = end;
             } else {
-                let (mut lo, mut hi) = (guess, end); // e(lo) and e(hi) straddle theta
+                // e(lo) and e(hi) straddle theta: regula falsi with the Illinois rule (the
+                // engagement is nearly linear in the heading over a bracket, so this takes 2–3
+                // readings where bisection took 7), until the end that does not exceed the
+                // reference reads within a pixel of it or the bracket is below 0.7°
+                let (mut lo, mut hi) = (guess, end);
+                let (mut flo, mut fhi) = (e0 - self.theta, e1 - self.theta);
+                let (mut wlo, mut whi) = (flo, fhi);
+                let mut last = 0i8;
                 for _ in 0..7 {
-                    let mid = 0.5 * (lo + hi);
-                    let em = eval(self, mid);
-                    if (em > self.theta) == (e0 > self.theta) {
-                        lo = mid;
+                    if (hi - lo).abs() < BRACKET_RAD {
+                        break;
+                    }
+                    let t = (wlo / (wlo - whi)).clamp(0.05, 0.95);
+                    let mid = lo + (hi - lo) * t;
+                    let fm = eval(self, mid) - self.theta;
+                    if (fm > 0.0) == (flo > 0.0) {
+                        (lo, flo, wlo) = (mid, fm, fm);
+                        if last == -1 {
+                            whi *= 0.5;
+                        }
+                        last = -1;
                     } else {
-                        hi = mid;
+                        (hi, fhi, whi) = (mid, fm, fm);
+                        if last == 1 {
+                            wlo *= 0.5;
+                        }
+                        last = 1;
+                    }
+                    let under = if e0 > self.theta { fhi } else { flo };
+                    if under >= -SETTLE_DEG {
+                        break;
                     }
                 }
                 // the side that does not exceed the reference
@@ -1275,3 +1303,4 @@ mod tests {
         assert!(runs.iter().all(|(_, m)| (1.0..=1.5).contains(m)));
     }
 }
+
