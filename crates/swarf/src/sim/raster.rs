@@ -117,8 +117,9 @@ fn visit_above(
     let (z0, z1) = path.z_range();
     let zmin = z0.min(z1);
     let flat = path.is_flat().then(|| (Fast::new(path), z0));
+    let st = stadium_of(path, rho);
     for j in j0..=j1 {
-        let Some((i0, i1)) = row_columns(grid, path, rho, j, i0, i1) else { continue };
+        let Some((i0, i1)) = row_columns(grid, st.as_ref(), j, i0, i1) else { continue };
         for (i0, i1) in block_runs(i0, i1) {
             // a block whose highest cell is not high enough holds nothing to visit
             if let Some((bmax, nbx)) = blocks
@@ -167,44 +168,66 @@ fn block_runs(i0: usize, i1: usize) -> impl Iterator<Item = (usize, usize)> {
     })
 }
 
-/// The x-range, on the row at height `y`, of the points within `r` of the segment `ab` (a
-/// stadium), when the row crosses it: the union of the two end disks' spans and of the band
-/// between them (the stadium is convex, so its extremes on a row lie on those).
-#[inline]
-fn stadium_span(a: DVec2, b: DVec2, r: f64, y: f64) -> Option<(f64, f64)> {
-    let mut xlo = f64::INFINITY;
-    let mut xhi = f64::NEG_INFINITY;
-    for c in [a, b] {
-        let dy = y - c.y;
-        let w2 = r * r - dy * dy;
-        if w2 >= 0.0 {
-            xlo = xlo.min(c.x - w2.sqrt());
-            xhi = xhi.max(c.x + w2.sqrt());
-        }
+/// The points within `r` of the segment `ab` (a stadium), prepared for row spans.
+struct Stadium {
+    a: DVec2,
+    b: DVec2,
+    r: f64,
+    /// The band's two sides (start and end points), when the segment has a length.
+    sides: Option<[(DVec2, DVec2); 2]>,
+}
+
+impl Stadium {
+    fn new(a: DVec2, b: DVec2, r: f64) -> Self {
+        let ab = b - a;
+        let sides = (ab.y.abs() > 1e-12 || ab.x.abs() > 1e-12).then(|| {
+            let n = DVec2::new(-ab.y, ab.x).normalize() * r;
+            [(a - n, b - n), (a + n, b + n)]
+        });
+        Stadium { a, b, r, sides }
     }
-    let ab = b - a;
-    if ab.y.abs() > 1e-12 || ab.x.abs() > 1e-12 {
-        let n = DVec2::new(-ab.y, ab.x).normalize();
-        for sgn in [-1.0, 1.0] {
-            let off = n * (r * sgn);
-            let (p, q) = (a + off, b + off);
+
+    /// Its x-range on the row at height `y`, when the row crosses it: the union of the two end
+    /// disks' spans and of the band between them (the stadium is convex, so its extremes on a
+    /// row lie on those).
+    #[inline]
+    fn span(&self, y: f64) -> Option<(f64, f64)> {
+        let mut xlo = f64::INFINITY;
+        let mut xhi = f64::NEG_INFINITY;
+        for c in [self.a, self.b] {
+            let dy = y - c.y;
+            let w2 = self.r * self.r - dy * dy;
+            if w2 >= 0.0 {
+                xlo = xlo.min(c.x - w2.sqrt());
+                xhi = xhi.max(c.x + w2.sqrt());
+            }
+        }
+        for (p, q) in self.sides.iter().flatten() {
             if (p.y - y) * (q.y - y) <= 0.0 && (q.y - p.y).abs() > 1e-12 {
                 let x = p.x + (y - p.y) / (q.y - p.y) * (q.x - p.x);
                 xlo = xlo.min(x);
                 xhi = xhi.max(x);
             }
         }
+        (xlo <= xhi).then_some((xlo, xhi))
     }
-    (xlo <= xhi).then_some((xlo, xhi))
+}
+
+/// The XY stadium of a straight move (none for an arc).
+fn stadium_of(path: &Path, rho: f64) -> Option<Stadium> {
+    match path {
+        Path::Line { a, b } => Some(Stadium::new(a.truncate(), b.truncate(), rho)),
+        Path::Arc(_) => None,
+    }
 }
 
 /// The columns `i0..=i1` a scan of the row `j` must visit for a path within `rho` (its box's
 /// columns, narrowed for a straight move to its stadium and a cell to spare either side: a
 /// long diagonal link would otherwise scan its whole bounding box, millions of cells).
-fn row_columns(grid: &Grid, path: &Path, rho: f64, j: usize, i0: usize, i1: usize) -> Option<(usize, usize)> {
-    let Path::Line { a, b } = path else { return Some((i0, i1)) };
+fn row_columns(grid: &Grid, st: Option<&Stadium>, j: usize, i0: usize, i1: usize) -> Option<(usize, usize)> {
+    let Some(st) = st else { return Some((i0, i1)) };
     let y = grid.y0 + (j as f64 + 0.5) * grid.res;
-    let (lo, hi) = stadium_span(a.truncate(), b.truncate(), rho, y)?;
+    let (lo, hi) = st.span(y)?;
     let lo = ((lo - grid.x0) / grid.res - 1.5).floor().max(i0 as f64);
     let hi = ((hi - grid.x0) / grid.res + 0.5).ceil().min(i1 as f64);
     (lo <= hi).then_some((lo as usize, hi as usize))
@@ -518,8 +541,9 @@ impl RasterSim {
             let (z0, z1) = path.z_range();
             let zmin = z0.min(z1) as f32;
             let flat = path.is_flat().then(|| (Fast::new(path), z0 as f32));
+            let st = stadium_of(path, r);
             for j in j0..=j1 {
-                let Some((i0, i1)) = row_columns(&self.grid, path, r, j, i0, i1) else { continue };
+                let Some((i0, i1)) = row_columns(&self.grid, st.as_ref(), j, i0, i1) else { continue };
                 for (i0, i1) in block_runs(i0, i1) {
                     // nothing in a block stands above the path's lowest point: nothing to cut
                     if self.bmax[(j / BLOCK) * self.nbx + i0 / BLOCK] <= zmin {
@@ -624,10 +648,11 @@ impl RasterSim {
         let ab = b - a;
         let l2 = ab.length_squared();
         let inv = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
+        let st = Stadium::new(a, b, r);
         for j in j0..=j1 {
             let y = self.grid.y0 + (j as f64 + 0.5) * res;
             // x-range of the stadium on this row
-            let Some((xlo, xhi)) = stadium_span(a, b, r, y) else { continue };
+            let Some((xlo, xhi)) = st.span(y) else { continue };
             let sa = {
                 let dy = y - a.y;
                 let w2 = r * r - dy * dy;
