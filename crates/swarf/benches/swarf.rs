@@ -8,6 +8,8 @@
 //! - `replay/full`: a whole replay of the offset program (cutting, both engagement methods,
 //!   gouge, collision and plunge checks), in samples per second;
 //! - `plan/offset`, `plan/zigzag`: the time of each strategy, planning only (`simulate: false`);
+//! - `edt/walls`: the distance transform of the part's cells over the planning grid (the
+//!   adaptive planner's distance to the walls), in cells per second;
 //! - `rough/offset+sim`: a full `rough()` with the simulation for the report.
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
@@ -168,6 +170,18 @@ fn plan(c: &mut Criterion) {
     g.finish();
 }
 
+fn edt(c: &mut Criterion) {
+    let job = case();
+    let sim = fresh_sim(&job);
+    let keep = sim.keep_mask();
+    let (nx, ny) = (sim.grid.nx, sim.grid.ny);
+    let mut g = c.benchmark_group("edt");
+    g.sample_size(20).throughput(Throughput::Elements((nx * ny) as u64));
+    g.bench_function("walls", |b| b.iter(|| black_box(swarf::sim::edt::distance(&keep, nx, ny).len())));
+    g.finish();
+    eprintln!("edt: {nx}×{ny} cells");
+}
+
 fn full(c: &mut Criterion) {
     let job = case();
     let opts = options(StrategyKind::Offset, true);
@@ -184,5 +198,5 @@ fn full(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, engagement, replay, plan, full);
+criterion_group!(benches, engagement, replay, plan, edt, full);
 criterion_main!(benches);

@@ -274,6 +274,8 @@ pub struct RasterSim {
 /// Side of the blocks of [`RasterSim::max_height_near`], cells.
 const BLOCK: usize = 8;
 
+use rayon::prelude::*;
+
 impl RasterSim {
     /// Builds the model of `job` for its tool.
     pub fn new(job: &Job, regions: &Regions, opts: &SimOptions) -> Result<Self> {
@@ -305,25 +307,26 @@ impl RasterSim {
         let reach = grid.rasterize(&regions.reachable.offset(-opts.tol, crate::model::REGION_TOL));
         let part_top_eff = job.part_top + job.allowance_floor;
         let floor_eff = job.floor + job.allowance_floor;
+        // (row by row in parallel: on a large grid, filling the arrays — and the first touch of
+        // their pages — took as long as a fifth of the planning)
         let n = grid.len();
-        let mut s0 = vec![f32::NEG_INFINITY; n];
-        let mut p = vec![floor_eff as f32; n];
-        let mut st = vec![0u8; n];
-        for k in 0..n {
-            if stock_mask[k] {
-                s0[k] = job.stock_top as f32;
-                st[k] |= state::STOCK;
-            }
-            if part_mask[k] {
-                st[k] |= state::PART;
-            }
-            if fix_mask[k] {
-                st[k] |= state::FIXTURE;
-            }
-            if keep_mask[k] {
-                p[k] = part_top_eff.max(floor_eff) as f32;
-            }
-        }
+        // (zeroed allocations are mapped lazily, so the first touch of each page happens in
+        // the parallel fill as well)
+        let (mut s0, mut p, mut st) = (vec![0f32; n], vec![0f32; n], vec![0u8; n]);
+        s0.par_chunks_mut(grid.nx)
+            .zip(p.par_chunks_mut(grid.nx))
+            .zip(st.par_chunks_mut(grid.nx))
+            .enumerate()
+            .for_each(|(j, ((s0, p), st))| {
+                for i in 0..grid.nx {
+                    let k = j * grid.nx + i;
+                    s0[i] = if stock_mask[k] { job.stock_top as f32 } else { f32::NEG_INFINITY };
+                    p[i] = if keep_mask[k] { part_top_eff.max(floor_eff) } else { floor_eff } as f32;
+                    st[i] = u8::from(stock_mask[k]) * state::STOCK
+                        | u8::from(part_mask[k]) * state::PART
+                        | u8::from(fix_mask[k]) * state::FIXTURE;
+                }
+            });
         // the circumference of the discretised tool (paper 1 §4.2, eq. 5: D_D = D·p): as many
         // points as the tool image has circumference pixels, on a circle half a pixel outside
         // the tool so that they sit in the first pixels the tool has not swept
@@ -384,11 +387,7 @@ impl RasterSim {
     fn with_blocks(mut self) -> Self {
         self.nbx = self.grid.nx.div_ceil(BLOCK);
         let nby = self.grid.ny.div_ceil(BLOCK);
-        self.bmax = vec![f32::NEG_INFINITY; self.nbx * nby];
-        self.bcnt = vec![0; self.nbx * nby];
-        for b in 0..self.bmax.len() {
-            self.read_block(b);
-        }
+        (self.bmax, self.bcnt) = (0..self.nbx * nby).into_par_iter().map(|b| self.block_max(b)).unzip();
         self
     }
 
@@ -401,6 +400,11 @@ impl RasterSim {
 
     /// Reads the maximum of block `b` and how many cells hold it.
     fn read_block(&mut self, b: usize) {
+        (self.bmax[b], self.bcnt[b]) = self.block_max(b);
+    }
+
+    /// The maximum of block `b` and how many cells hold it.
+    fn block_max(&self, b: usize) -> (f32, u32) {
         let (i0, i1, j0, j1) = self.block_cells(b);
         let mut m = f32::NEG_INFINITY;
         let mut n = 0;
@@ -414,8 +418,7 @@ impl RasterSim {
                 }
             }
         }
-        self.bmax[b] = m;
-        self.bcnt[b] = n;
+        (m, n)
     }
 
     /// Tool radius.
