@@ -322,9 +322,9 @@ impl RasterSim {
                     let k = j * grid.nx + i;
                     s0[i] = if stock_mask[k] { job.stock_top as f32 } else { f32::NEG_INFINITY };
                     p[i] = if keep_mask[k] { part_top_eff.max(floor_eff) } else { floor_eff } as f32;
-                    st[i] = u8::from(stock_mask[k]) * state::STOCK
-                        | u8::from(part_mask[k]) * state::PART
-                        | u8::from(fix_mask[k]) * state::FIXTURE;
+                    st[i] = (u8::from(stock_mask[k]) * state::STOCK)
+                        | (u8::from(part_mask[k]) * state::PART)
+                        | (u8::from(fix_mask[k]) * state::FIXTURE);
                 }
             });
         // the circumference of the discretised tool (paper 1 §4.2, eq. 5: D_D = D·p): as many
