@@ -69,17 +69,17 @@ impl Grid {
     /// Index ranges `(i0..=i1, j0..=j1)` of cells whose centres may lie in `[lo, hi]`.
     #[inline]
     pub fn range(&self, lo: DVec2, hi: DVec2) -> Option<(usize, usize, usize, usize)> {
-        let i0 = ((lo.x - self.x0) / self.res - 0.5).ceil();
-        let j0 = ((lo.y - self.y0) / self.res - 0.5).ceil();
-        let i1 = ((hi.x - self.x0) / self.res - 0.5).floor();
-        let j1 = ((hi.y - self.y0) / self.res - 0.5).floor();
-        if i1 < 0.0 || j1 < 0.0 || i0 >= self.nx as f64 || j0 >= self.ny as f64 || i0 > i1 || j0 > j1 {
+        let i0 = ceil_i((lo.x - self.x0) / self.res - 0.5);
+        let j0 = ceil_i((lo.y - self.y0) / self.res - 0.5);
+        let i1 = floor_i((hi.x - self.x0) / self.res - 0.5);
+        let j1 = floor_i((hi.y - self.y0) / self.res - 0.5);
+        if i1 < 0 || j1 < 0 || i0 >= self.nx as i64 || j0 >= self.ny as i64 || i0 > i1 || j0 > j1 {
             return None;
         }
         Some((
-            i0.max(0.0) as usize,
+            i0.max(0) as usize,
             (i1 as usize).min(self.nx - 1),
-            j0.max(0.0) as usize,
+            j0.max(0) as usize,
             (j1 as usize).min(self.ny - 1),
         ))
     }
@@ -144,5 +144,33 @@ mod tests {
         let n = fine.rasterize(&c).iter().filter(|b| **b).count() as f64 * 0.0025;
         assert!((n - std::f64::consts::PI * 16.0).abs() < 0.1, "{n}");
         assert_eq!(g.cell_of(DVec2::new(0.1, 0.1)), Some((2, 2)));
+    }
+}
+
+/// ⌈x⌉ as an integer, for finite `x` within `i64` (as `x.ceil() as i64`). `f64::ceil` is a
+/// libm call on the x86-64 baseline (no SSE4.1), and the simulator's row scans make millions.
+#[inline]
+pub fn ceil_i(x: f64) -> i64 {
+    let t = x as i64;
+    if (t as f64) < x { t + 1 } else { t }
+}
+
+/// ⌊x⌋ as an integer, for finite `x` within `i64` (see [`ceil_i`]).
+#[inline]
+pub fn floor_i(x: f64) -> i64 {
+    let t = x as i64;
+    if (t as f64) > x { t - 1 } else { t }
+}
+
+#[cfg(test)]
+mod rounding_tests {
+    use super::*;
+
+    #[test]
+    fn integer_ceil_and_floor_match_std() {
+        for x in [-3.0, -2.5, -1.0000001, -0.5, -0.0, 0.0, 1e-300, 0.5, 1.0, 2.9999999, 7.5, 1e12 + 0.5] {
+            assert_eq!(ceil_i(x), x.ceil() as i64, "ceil {x}");
+            assert_eq!(floor_i(x), x.floor() as i64, "floor {x}");
+        }
     }
 }

@@ -2,13 +2,14 @@
 
 use super::SimOptions;
 use super::exact::ExactModel;
-use super::grid::Grid;
+use super::grid::{Grid, ceil_i, floor_i};
 use super::sweep::{Fast, Path};
 use crate::error::{Error, Result};
 use crate::geom::index::EdgeIndex;
 use crate::geom::{Area, DVec2, DVec3};
 use crate::model::{Job, Regions};
 use crate::toolpath::{MoveKind, Toolpath, move_length};
+use rayon::prelude::*;
 
 /// Cell state bits (paper 1 §4: part / stock; fixture; neither = free space).
 pub mod state {
@@ -228,8 +229,8 @@ fn row_columns(grid: &Grid, st: Option<&Stadium>, j: usize, i0: usize, i1: usize
     let Some(st) = st else { return Some((i0, i1)) };
     let y = grid.y0 + (j as f64 + 0.5) * grid.res;
     let (lo, hi) = st.span(y)?;
-    let lo = ((lo - grid.x0) / grid.res - 1.5).floor().max(i0 as f64);
-    let hi = ((hi - grid.x0) / grid.res + 0.5).ceil().min(i1 as f64);
+    let lo = floor_i((lo - grid.x0) / grid.res - 1.5).max(i0 as i64);
+    let hi = ceil_i((hi - grid.x0) / grid.res + 0.5).min(i1 as i64);
     (lo <= hi).then_some((lo as usize, hi as usize))
 }
 
@@ -273,8 +274,6 @@ pub struct RasterSim {
 
 /// Side of the blocks of [`RasterSim::max_height_near`], cells.
 const BLOCK: usize = 8;
-
-use rayon::prelude::*;
 
 impl RasterSim {
     /// Builds the model of `job` for its tool.
@@ -646,8 +645,8 @@ impl RasterSim {
         let lo_y = a.y.min(b.y) - r;
         let hi_y = a.y.max(b.y) + r;
         let (nx, ny) = (self.grid.nx as i64, self.grid.ny as i64);
-        let j0 = (((lo_y - self.grid.y0) / res) - 0.5).ceil().max(0.0) as i64;
-        let j1 = (((hi_y - self.grid.y0) / res) - 0.5).floor().min(ny as f64 - 1.0) as i64;
+        let j0 = ceil_i(((lo_y - self.grid.y0) / res) - 0.5).max(0);
+        let j1 = floor_i(((hi_y - self.grid.y0) / res) - 0.5).min(ny - 1);
         let ab = b - a;
         let l2 = ab.length_squared();
         let inv = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
@@ -661,13 +660,13 @@ impl RasterSim {
                 let w2 = r * r - dy * dy;
                 if w2 >= 0.0 { Some((a.x - w2.sqrt(), a.x + w2.sqrt())) } else { None }
             };
-            let i0 = (((xlo - self.grid.x0) / res) - 0.5).ceil().max(0.0) as i64;
-            let i1 = (((xhi - self.grid.x0) / res) - 0.5).floor().min(nx as f64 - 1.0) as i64;
+            let i0 = ceil_i(((xlo - self.grid.x0) / res) - 0.5).max(0);
+            let i1 = floor_i(((xhi - self.grid.x0) / res) - 0.5).min(nx - 1);
             // cells inside the disk at `a` were cut by the previous step (or are about to be
             // skipped by the height test below anyway)
             let inner = sa.map(|(l, h)| {
-                let l = (((l - self.grid.x0) / res) - 0.5).ceil() as i64 + 1;
-                let h = (((h - self.grid.x0) / res) - 0.5).floor() as i64 - 1;
+                let l = ceil_i(((l - self.grid.x0) / res) - 0.5) + 1;
+                let h = floor_i(((h - self.grid.x0) / res) - 0.5) - 1;
                 (l, h)
             });
             let row = j as usize * self.grid.nx;
