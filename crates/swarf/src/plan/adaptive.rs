@@ -1303,4 +1303,3 @@ mod tests {
         assert!(runs.iter().all(|(_, m)| (1.0..=1.5).contains(m)));
     }
 }
-

@@ -76,12 +76,7 @@ impl Grid {
         if i1 < 0 || j1 < 0 || i0 >= self.nx as i64 || j0 >= self.ny as i64 || i0 > i1 || j0 > j1 {
             return None;
         }
-        Some((
-            i0.max(0) as usize,
-            (i1 as usize).min(self.nx - 1),
-            j0.max(0) as usize,
-            (j1 as usize).min(self.ny - 1),
-        ))
+        Some((i0.max(0) as usize, (i1 as usize).min(self.nx - 1), j0.max(0) as usize, (j1 as usize).min(self.ny - 1)))
     }
 
     /// Exact even-odd fill of `area` at cell centres.

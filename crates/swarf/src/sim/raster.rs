@@ -312,11 +312,8 @@ impl RasterSim {
         // (zeroed allocations are mapped lazily, so the first touch of each page happens in
         // the parallel fill as well)
         let (mut s0, mut p, mut st) = (vec![0f32; n], vec![0f32; n], vec![0u8; n]);
-        s0.par_chunks_mut(grid.nx)
-            .zip(p.par_chunks_mut(grid.nx))
-            .zip(st.par_chunks_mut(grid.nx))
-            .enumerate()
-            .for_each(|(j, ((s0, p), st))| {
+        s0.par_chunks_mut(grid.nx).zip(p.par_chunks_mut(grid.nx)).zip(st.par_chunks_mut(grid.nx)).enumerate().for_each(
+            |(j, ((s0, p), st))| {
                 for i in 0..grid.nx {
                     let k = j * grid.nx + i;
                     s0[i] = if stock_mask[k] { job.stock_top as f32 } else { f32::NEG_INFINITY };
@@ -325,7 +322,8 @@ impl RasterSim {
                         | (u8::from(part_mask[k]) * state::PART)
                         | (u8::from(fix_mask[k]) * state::FIXTURE);
                 }
-            });
+            },
+        );
         // the circumference of the discretised tool (paper 1 §4.2, eq. 5: D_D = D·p): as many
         // points as the tool image has circumference pixels, on a circle half a pixel outside
         // the tool so that they sit in the first pixels the tool has not swept
@@ -650,45 +648,64 @@ impl RasterSim {
         let ab = b - a;
         let l2 = ab.length_squared();
         let inv = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
-        let st = Stadium::new(a, b, r);
+        let (x0, inv_res) = (self.grid.x0, 1.0 / res);
+        // (a column's fractional index by a product, and the band's sides by their slopes: a
+        // step visits a hundred rows, and their divisions and square roots were most of it)
+        let col = |x: f64| (x - x0) * inv_res - 0.5;
+        let sides = Stadium::new(a, b, r).sides.map(|sides| {
+            sides.map(|(p, q)| {
+                let slope = if (q.y - p.y).abs() > 1e-12 { Some((q.x - p.x) / (q.y - p.y)) } else { None };
+                (p, q.y.min(p.y), q.y.max(p.y), slope)
+            })
+        });
+        let half = |c: DVec2, y: f64| {
+            let dy = y - c.y;
+            let w2 = r * r - dy * dy;
+            (w2 >= 0.0).then(|| w2.sqrt())
+        };
         for j in j0..=j1 {
             let y = self.grid.y0 + (j as f64 + 0.5) * res;
-            // x-range of the stadium on this row
-            let Some((xlo, xhi)) = st.span(y) else { continue };
-            let sa = {
-                let dy = y - a.y;
-                let w2 = r * r - dy * dy;
-                if w2 >= 0.0 { Some((a.x - w2.sqrt(), a.x + w2.sqrt())) } else { None }
-            };
-            let i0 = ceil_i(((xlo - self.grid.x0) / res) - 0.5).max(0);
-            let i1 = floor_i(((xhi - self.grid.x0) / res) - 0.5).min(nx - 1);
-            // cells inside the disk at `a` were cut by the previous step (or are about to be
-            // skipped by the height test below anyway)
-            let inner = sa.map(|(l, h)| {
-                let l = ceil_i(((l - self.grid.x0) / res) - 0.5) + 1;
-                let h = floor_i(((h - self.grid.x0) / res) - 0.5) - 1;
-                (l, h)
-            });
-            let row = j as usize * self.grid.nx;
-            let mut i = i0;
-            while i <= i1 {
-                if let Some((l, h)) = inner
-                    && i >= l
-                    && i <= h
+            // x-range of the stadium on this row (see [`Stadium::span`])
+            let (wa, wb) = (half(a, y), half(b, y));
+            let mut xlo = f64::INFINITY;
+            let mut xhi = f64::NEG_INFINITY;
+            if let Some(w) = wa {
+                (xlo, xhi) = (a.x - w, a.x + w);
+            }
+            if let Some(w) = wb {
+                (xlo, xhi) = (xlo.min(b.x - w), xhi.max(b.x + w));
+            }
+            for (p, ylo, yhi, slope) in sides.iter().flatten() {
+                if let Some(m) = slope
+                    && y >= *ylo
+                    && y <= *yhi
                 {
-                    i = h + 1;
-                    continue;
+                    let x = p.x + (y - p.y) * m;
+                    (xlo, xhi) = (xlo.min(x), xhi.max(x));
                 }
-                let k = row + i as usize;
-                if self.s[k] > zf {
-                    let q = DVec2::new(self.grid.x0 + (i as f64 + 0.5) * res, y);
-                    let t = ((q - a).dot(ab) * inv).clamp(0.0, 1.0);
-                    if (a + ab * t - q).length_squared() <= r * r {
-                        self.lower(k, zf);
-                        count += 1;
+            }
+            if xlo > xhi {
+                continue;
+            }
+            let i0 = ceil_i(col(xlo)).max(0);
+            let i1 = floor_i(col(xhi)).min(nx - 1);
+            // cells inside the disk at `a` were cut by the previous step (or are about to be
+            // skipped by the height test below anyway): the row is scanned on either side
+            let (l, h) = wa.map_or((1, 0), |w| (ceil_i(col(a.x - w)) + 1, floor_i(col(a.x + w)) - 1));
+            let runs = if l <= h { [(i0, i1.min(l - 1)), (i0.max(h + 1), i1)] } else { [(i0, i1), (1, 0)] };
+            let row = j as usize * self.grid.nx;
+            for (ra, rb) in runs {
+                for i in ra..=rb {
+                    let k = row + i as usize;
+                    if self.s[k] > zf {
+                        let q = DVec2::new(x0 + (i as f64 + 0.5) * res, y);
+                        let t = ((q - a).dot(ab) * inv).clamp(0.0, 1.0);
+                        if (a + ab * t - q).length_squared() <= r * r {
+                            self.lower(k, zf);
+                            count += 1;
+                        }
                     }
                 }
-                i += 1;
             }
         }
         count
@@ -900,14 +917,22 @@ impl RasterSim {
                 // a rapid must not touch uncut material
                 let mut worst = 0.0f64;
                 let mut at = m.to;
-                visit_above(&self.grid, &self.s, Some((&self.bmax, self.nbx)), &path, self.r - self.tol, self.eps, |k, q, z| {
-                    let d = self.s[k] as f64 - z;
-                    if d > worst {
-                        worst = d;
-                        at = DVec3::new(q.x, q.y, z);
-                    }
-                    true
-                });
+                visit_above(
+                    &self.grid,
+                    &self.s,
+                    Some((&self.bmax, self.nbx)),
+                    &path,
+                    self.r - self.tol,
+                    self.eps,
+                    |k, q, z| {
+                        let d = self.s[k] as f64 - z;
+                        if d > worst {
+                            worst = d;
+                            at = DVec3::new(q.x, q.y, z);
+                        }
+                        true
+                    },
+                );
                 if worst > 0.0 {
                     out.rapid_collisions.push(Event { move_index: mi, at: at.to_array(), depth: worst });
                 }
@@ -1171,12 +1196,58 @@ mod tests {
                         _ => before[k],
                     };
                     let got = s.heights()[k];
-                    assert!(got == want || (got - want).abs() < 1e-5, "{a:?}→{b:?} at cell ({i}, {j}): {got} vs {want}");
+                    assert!(
+                        got == want || (got - want).abs() < 1e-5,
+                        "{a:?}→{b:?} at cell ({i}, {j}): {got} vs {want}"
+                    );
                     lowered += usize::from(s.heights()[k] < before[k]);
                 }
             }
             assert!(lowered > 100, "{a:?}→{b:?} lowered {lowered} cells");
         }
+    }
+
+    #[test]
+    fn chained_steps_lower_exactly_the_swept_cells() {
+        // a pass of short steps turning every way, as the planner cuts it (the tool has arrived
+        // at the first point, so its disk there is cut): the cells within the radius of the
+        // polyline are lowered, and no others
+        let mut s = sim();
+        let z = -1.0;
+        let r = 2.995;
+        let mut pts = vec![DVec2::new(-9.0, -4.0)];
+        for k in 1..60 {
+            let a = 0.37 * k as f64;
+            let step = if k % 7 == 0 { 0.05 } else { 0.6 };
+            pts.push(pts[k - 1] + step * DVec2::new(a.cos(), a.sin()));
+        }
+        s.cut(&Path::Line { a: pts[0].extend(z), b: pts[0].extend(z) });
+        let before = s.heights().to_vec();
+        for w in pts.windows(2) {
+            s.cut_step_r(w[0], w[1], z, r);
+        }
+        let g = s.grid;
+        let mut swept = 0;
+        for j in 0..g.ny {
+            for i in 0..g.nx {
+                let q = g.center(i, j);
+                let k = j * g.nx + i;
+                let d = pts
+                    .windows(2)
+                    .map(|w| Path::Line { a: w[0].extend(z), b: w[1].extend(z) }.distance(q))
+                    .fold(f64::INFINITY, f64::min);
+                let want = if d <= r - 1e-9 && before[k] > z as f32 {
+                    z as f32
+                } else if d > r + 1e-9 {
+                    before[k]
+                } else {
+                    s.heights()[k]
+                };
+                assert_eq!(s.heights()[k], want, "cell ({i}, {j}) at {d:.4} from the pass");
+                swept += usize::from(s.heights()[k] < before[k]);
+            }
+        }
+        assert!(swept > 3000, "{swept}");
     }
 
     #[test]
