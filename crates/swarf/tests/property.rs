@@ -585,13 +585,10 @@ fn random_open_jobs_offset() {
 
 // Adaptive: 200 closed pockets with islands (seeds 3000..3200), run on every core.
 //
-// Every job must be clean (no gouge, collision or plunge, rest under 0.5 %). The engagement
-// bound (p99 within the reference + 10°, under 0.5 % of the time above the reference + 20°)
-// holds on most of them (197 of 200 today); the others are small pockets, a few tool
-// diameters across, two with an arm barely wider than the tool (the clean-up slots its end)
-// and a star a couple of degrees over. Their number is held to a ceiling so that it can only
-// go down (issue 3 stays open until it is 0).
-const ADAPTIVE_BOUND_FAILURES_MAX: usize = 3;
+// Every job must be clean (no gouge, collision or plunge, rest under 0.5 %) and within the
+// engagement bound (p99 within the reference + 10°, under 0.5 % of the time above the
+// reference + 20°). The hardest are small pockets a few tool diameters across with an arm
+// barely wider than the tool (seeds 3050 and 3092), which need the shorter steps by the walls.
 
 #[test]
 fn random_pockets_adaptive() {
@@ -657,8 +654,8 @@ fn random_pockets_adaptive() {
         dirty.join("\n\n")
     );
     assert!(
-        bound.len() <= ADAPTIVE_BOUND_FAILURES_MAX,
-        "{} of {} adaptive jobs exceed the engagement bound (ceiling {ADAPTIVE_BOUND_FAILURES_MAX}):\n{}",
+        bound.is_empty(),
+        "{} of {} adaptive jobs exceed the engagement bound:\n{}",
         bound.len(),
         results.len(),
         bound.join("\n")

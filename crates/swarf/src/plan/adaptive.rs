@@ -44,8 +44,13 @@
 //!    same way. A contour pass ends after `R` of cutting air; the air at the end of any pass is
 //!    dropped from the program.
 //!
-//! The step advances `0.1·D`; the material model is updated after every step (only the newly
-//! swept cells are visited). Every pass is simplified with Douglas–Peucker (§5.1) within 2 µm
+//! The step advances `0.1·D`; where a full step would run into a wall it is shortened to half
+//! the room the tool has to the walls (down to a quarter step), so that in a channel barely
+//! wider than the tool the heading can turn within it — the constant-engagement passes then
+//! make the loops of trochoidal milling instead of slotting (swarf's addition: the adaptive
+//! step length). The heading search of a step (above) is regula falsi between the direction
+//! of eq. 9 and the end of the front half. The material model is updated after every step
+//! (only the newly swept cells are visited). Every pass is simplified with Douglas–Peucker (§5.1) within 2 µm
 //! and arc-fitted within the arc tolerance; the walls are kept at `R` plus both tolerances, so
 //! neither can bring the tool into the part. A start that removes next to nothing is not tried
 //! again on that level. Links between passes stay down through cleared space (rapids at depth,
@@ -1072,10 +1077,21 @@ impl<'a, 'b> Engine<'a, 'b> {
     /// One step of constant-engagement milling (Algorithm 1): the direction of eq. 8–11, then
     /// — swarf's addition — checked against the engagement at the point it leads to (the front
     /// half of the tool, against the stock as it is). When that is off by more than a few
-    /// degrees, the heading is found by bisection between the paper's direction and the side of
+    /// degrees, the heading is found by regula falsi between the paper's direction and the side of
     /// the front half that moves the tool into or out of the material, so the step lands on the
     /// reference engagement and the material stays on the same side (the milling type is kept).
     fn engage_step(&mut self, c: DVec2, alpha_p: f64) -> EngageStep {
+        match self.engage_step_of(c, alpha_p, self.step) {
+            // a full step runs into a wall: where the walls are close round the tool (a channel
+            // barely wider than it), a shorter one lets it turn within the room it has — the
+            // loops of trochoidal milling — before it gives up to contour milling
+            EngageStep::Wall if self.step_at(c) < self.step => self.engage_step_of(c, alpha_p, self.step_at(c)),
+            es => es,
+        }
+    }
+
+    /// [`Self::engage_step`] with the step length `step`.
+    fn engage_step_of(&mut self, c: DVec2, alpha_p: f64, step: f64) -> EngageStep {
         let Some(guess) = self.direction(c, alpha_p) else { return EngageStep::Done };
         // keep the heading within the front half of the previous direction
         let toward = if self.climb { -1.0 } else { 1.0 };
@@ -1083,7 +1099,7 @@ impl<'a, 'b> Engine<'a, 'b> {
         let guess = alpha_p + wrap_pi(guess - alpha_p).clamp(-lim, lim);
         let eval = |me: &Self, a: f64| {
             let u = DVec2::new(a.cos(), a.sin());
-            me.l.sim.front_engagement(c + u * me.step, me.z, u)
+            me.l.sim.front_engagement(c + u * step, me.z, u)
         };
         let e0 = eval(self, guess);
         let mut alpha = guess;
@@ -1137,11 +1153,19 @@ impl<'a, 'b> Engine<'a, 'b> {
                 alpha = if e0 > self.theta { hi } else { lo };
             }
         }
-        let n = c + DVec2::new(alpha.cos(), alpha.sin()) * self.step;
+        let n = c + DVec2::new(alpha.cos(), alpha.sin()) * step;
         if !self.allowed(n) || !self.step_allowed(c, n) {
             return EngageStep::Wall;
         }
         EngageStep::Moved(n, alpha)
+    }
+
+    /// The shorter step of constant engagement at `c`, where a full one (`0.1·D`) runs into a
+    /// wall: half the room the tool has to the walls, down to a quarter step.
+    fn step_at(&self, c: DVec2) -> f64 {
+        let room = self.dk_at(c) - self.r - self.margin;
+        let min = (0.25 * self.step).max(2.0 * self.l.sim.grid.res);
+        (0.5 * room).clamp(min.min(self.step), self.step)
     }
 
     /// When the heading of eq. 9 runs into a wall: the heading nearest to it, turned away from
