@@ -44,19 +44,19 @@
 //!    same way. A contour pass ends after `R` of cutting air; the air at the end of any pass is
 //!    dropped from the program.
 //!
-//! The step advances `0.1·D`; where a full step would run into a wall it is shortened to half
-//! the room the tool has to the walls (down to a quarter step), so that in a channel barely
-//! wider than the tool the heading can turn within it — the constant-engagement passes then
-//! make the loops of trochoidal milling instead of slotting (swarf's addition: the adaptive
-//! step length). The heading search of a step (above) is regula falsi between the direction
-//! of eq. 9 and the end of the front half. The material model is updated after every step
-//! (only the newly swept cells are visited). Every pass is simplified with Douglas–Peucker (§5.1) within 2 µm
-//! and arc-fitted within the arc tolerance; the walls are kept at `R` plus both tolerances, so
-//! neither can bring the tool into the part. A start that removes next to nothing is not tried
-//! again on that level. Links between passes stay down through cleared space (rapids at depth,
-//! fed while the tool leaves the material it touches) or lift over it (see [`super`]); because
-//! the model cuts cells by their centres, a cell counted as cut can hold material up to 0.71
-//! cell from its centre, so landings are tested 1.5 cells and links 0.75 cell beyond the tool.
+//! The step advances `0.1·D`; where a full step would run into a wall it is shortened to half the
+//! room the tool has to the walls (down to a quarter step), so that in a channel barely wider than
+//! the tool the heading can turn within it — the constant-engagement passes then make the loops of
+//! trochoidal milling instead of slotting (swarf's addition: the adaptive step length). The heading
+//! search of a step (above) is regula falsi between the direction of eq. 9 and the end of the front
+//! half. The material model is updated after every step (only the newly swept cells are visited).
+//! Every pass is simplified with Douglas–Peucker (§5.1) within 2 µm and arc-fitted within the arc
+//! tolerance; the walls are kept at `R` plus both tolerances, so neither can bring the tool into
+//! the part. A start that removes next to nothing is not tried again on that level. Links between
+//! passes stay down through cleared space (rapids at depth, fed while the tool leaves the material
+//! it touches) or lift over it (see [`super`]); because the model cuts cells by their centres, a
+//! cell counted as cut can hold material up to 0.71 cell from its centre, so landings are tested
+//! 1.5 cells and links 0.75 cell beyond the tool.
 //! What the passes leave (slivers the ring cannot see, strips along walls too heavy to follow)
 //! is found exactly from the swept area and cleared by [`crate::strategy::cleanup`] passes:
 //! level curves of the wall distance, farthest first, then the wall contour itself — after
@@ -1077,9 +1077,10 @@ impl<'a, 'b> Engine<'a, 'b> {
     /// One step of constant-engagement milling (Algorithm 1): the direction of eq. 8–11, then
     /// — swarf's addition — checked against the engagement at the point it leads to (the front
     /// half of the tool, against the stock as it is). When that is off by more than a few
-    /// degrees, the heading is found by regula falsi between the paper's direction and the side of
-    /// the front half that moves the tool into or out of the material, so the step lands on the
-    /// reference engagement and the material stays on the same side (the milling type is kept).
+    /// degrees, the heading is found by regula falsi between the paper's direction and the side
+    /// of the front half that moves the tool into or out of the material, so the step lands on
+    /// the reference engagement and the material stays on the same side (the milling type is
+    /// kept).
     fn engage_step(&mut self, c: DVec2, alpha_p: f64) -> EngageStep {
         match self.engage_step_of(c, alpha_p, self.step) {
             // a full step runs into a wall: where the walls are close round the tool (a channel
