@@ -130,6 +130,40 @@ pub struct Regions {
 pub const REGION_TOL: f64 = 0.001;
 
 impl Job {
+    /// A job `depth` mm deep from z = 0, with swarf's defaults for what a drawing does not say:
+    /// stock and part tops at 0, no fixtures, no allowance, a flat end mill of
+    /// `tool_diameter`, 40 % stepover, one level, 1000 mm/min feed, 5000 mm/min rapids for the
+    /// time estimates, 10 000 rpm. Set any other field with struct update syntax:
+    ///
+    /// ```
+    /// use swarf::geom::Area;
+    /// use swarf::model::{Job, Width};
+    /// let job = Job {
+    ///     width: Width::EngagementDeg(60.0),
+    ///     ..Job::new("pocket", Area::rect(0.0, 0.0, 40.0, 30.0), Area::empty(), 6.0, 5.0)
+    /// };
+    /// assert_eq!(job.floor, -5.0);
+    /// ```
+    pub fn new(name: impl Into<String>, stock: Area, part: Area, tool_diameter: f64, depth: f64) -> Job {
+        Job {
+            name: name.into(),
+            stock,
+            stock_top: 0.0,
+            part,
+            part_top: 0.0,
+            fixtures: Area::empty(),
+            floor: -depth,
+            allowance: 0.0,
+            allowance_floor: 0.0,
+            tool: Tool::flat(tool_diameter),
+            width: Width::Stepover(0.4),
+            stepdown: None,
+            feed: 1000.0,
+            rapid_rate: 5000.0,
+            spindle_rpm: 10000.0,
+        }
+    }
+
     /// Checks every value a user can get wrong.
     pub fn validate(&self) -> Result<()> {
         let d = self.tool.diameter;

@@ -24,21 +24,8 @@ const MIDDLE: f64 = 12.0;
 
 fn job(d: f64) -> Job {
     Job {
-        name: "engagement".into(),
-        stock: Area::rect(-HALF, -HALF, HALF, HALF),
-        stock_top: 0.0,
-        part: Area::empty(),
-        part_top: 0.0,
-        fixtures: Area::empty(),
-        floor: -5.0,
-        allowance: 0.0,
-        allowance_floor: 0.0,
-        tool: Tool::flat(d),
         width: Width::Stepover(0.25),
-        stepdown: None,
-        feed: 1000.0,
-        rapid_rate: 5000.0,
-        spindle_rpm: 10000.0,
+        ..Job::new("engagement", Area::rect(-HALF, -HALF, HALF, HALF), Area::empty(), d, 5.0)
     }
 }
 

@@ -10,7 +10,7 @@ use super::Overrides;
 use crate::error::{Error, Result};
 use crate::geom::area::Fill;
 use crate::geom::{Area, DVec2};
-use crate::model::{Job, Tool, Width};
+use crate::model::{Job, Width};
 use swarf_import::{Drawing, Role};
 
 /// Chord tolerance for flattening the drawing's arcs into region polygons (mm).
@@ -58,21 +58,5 @@ pub fn job_from_drawing(d: &Drawing, ov: &Overrides) -> Result<Job> {
         return Err(Error::param("--depth", format!("{depth} mm: the depth must be positive")));
     }
     let name = file.file_stem().and_then(|s| s.to_str()).unwrap_or("drawing").to_string();
-    Ok(Job {
-        name,
-        stock,
-        stock_top: 0.0,
-        part,
-        part_top: 0.0,
-        fixtures,
-        floor: -depth,
-        allowance: 0.0,
-        allowance_floor: 0.0,
-        tool: Tool::flat(tool_d),
-        width: ov.width.unwrap_or(Width::Stepover(0.4)),
-        stepdown: None,
-        feed: 1000.0,
-        rapid_rate: 5000.0,
-        spindle_rpm: 10000.0,
-    })
+    Ok(Job { fixtures, width: ov.width.unwrap_or(Width::Stepover(0.4)), ..Job::new(name, stock, part, tool_d, depth) })
 }

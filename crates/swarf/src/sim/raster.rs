@@ -1100,7 +1100,7 @@ impl RasterSim {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{Tool, Width};
+    use crate::model::Width;
 
     /// A 40 mm square of stock, no part, a Ø6 tool, 0.1 mm cells.
     fn sim() -> RasterSim {
@@ -1109,23 +1109,7 @@ mod tests {
 
     /// The same with another stock and a part.
     fn sim_with(stock: Area, part: Area) -> RasterSim {
-        let job = Job {
-            name: "t".into(),
-            stock,
-            stock_top: 0.0,
-            part,
-            part_top: 0.0,
-            fixtures: Area::empty(),
-            floor: -5.0,
-            allowance: 0.0,
-            allowance_floor: 0.0,
-            tool: Tool::flat(6.0),
-            width: Width::Stepover(0.25),
-            stepdown: None,
-            feed: 1000.0,
-            rapid_rate: 5000.0,
-            spindle_rpm: 10000.0,
-        };
+        let job = Job { floor: -5.0, width: Width::Stepover(0.25), ..Job::new("t", stock, part, 6.0, 5.0) };
         let regions = job.regions(job.radius(), 0.0).expect("regions");
         RasterSim::new(&job, &regions, &SimOptions { res: Some(0.1), ..Default::default() }).expect("simulator")
     }
