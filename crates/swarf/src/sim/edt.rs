@@ -1,7 +1,8 @@
 //! Exact Euclidean distance transform on a grid (Felzenszwalb & Huttenlocher 2012, "Distance
-//! transforms of sampled functions"): two passes of the lower envelope of parabolas, linear in
-//! the number of cells. Written here because the crates that have it (imageproc) bring an image
-//! stack with them and work on their own image types; this is sixty lines over a plain slice.
+//! transforms of sampled functions"): a pass along the columns (on a binary input, two sweeps)
+//! and one along the rows by the lower envelope of parabolas, linear in the number of cells.
+//! Written here because the crates that have it (imageproc) bring an image stack with them and
+//! work on their own image types; this is sixty lines over a plain slice.
 
 /// Squared distances along one line: `f` holds 0 at sites and `INF` elsewhere (or the squared
 /// distances of the previous pass); the result overwrites `d`.

@@ -124,24 +124,6 @@ impl Grid {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn fill_counts_cell_centres() {
-        let g = Grid::covering(DVec2::new(0.0, 0.0), DVec2::new(10.0, 10.0), 1.0, 0.5, DVec2::ZERO);
-        let a = Area::rect(0.0, 0.0, 10.0, 5.0);
-        let m = g.rasterize(&a);
-        assert_eq!(m.iter().filter(|b| **b).count(), 20 * 10);
-        let fine = Grid::covering(DVec2::new(0.0, 0.0), DVec2::new(10.0, 10.0), 1.0, 0.05, DVec2::ZERO);
-        let c = Area::disk(DVec2::new(5.0, 5.0), 4.0, 0.001);
-        let n = fine.rasterize(&c).iter().filter(|b| **b).count() as f64 * 0.0025;
-        assert!((n - std::f64::consts::PI * 16.0).abs() < 0.1, "{n}");
-        assert_eq!(g.cell_of(DVec2::new(0.1, 0.1)), Some((2, 2)));
-    }
-}
-
 /// ⌈x⌉ as an integer, for finite `x` within `i64` (as `x.ceil() as i64`). `f64::ceil` is a
 /// libm call on the x86-64 baseline (no SSE4.1), and the simulator's row scans make millions.
 #[inline]
@@ -158,8 +140,21 @@ pub fn floor_i(x: f64) -> i64 {
 }
 
 #[cfg(test)]
-mod rounding_tests {
+mod tests {
     use super::*;
+
+    #[test]
+    fn fill_counts_cell_centres() {
+        let g = Grid::covering(DVec2::new(0.0, 0.0), DVec2::new(10.0, 10.0), 1.0, 0.5, DVec2::ZERO);
+        let a = Area::rect(0.0, 0.0, 10.0, 5.0);
+        let m = g.rasterize(&a);
+        assert_eq!(m.iter().filter(|b| **b).count(), 20 * 10);
+        let fine = Grid::covering(DVec2::new(0.0, 0.0), DVec2::new(10.0, 10.0), 1.0, 0.05, DVec2::ZERO);
+        let c = Area::disk(DVec2::new(5.0, 5.0), 4.0, 0.001);
+        let n = fine.rasterize(&c).iter().filter(|b| **b).count() as f64 * 0.0025;
+        assert!((n - std::f64::consts::PI * 16.0).abs() < 0.1, "{n}");
+        assert_eq!(g.cell_of(DVec2::new(0.1, 0.1)), Some((2, 2)));
+    }
 
     #[test]
     fn integer_ceil_and_floor_match_std() {
