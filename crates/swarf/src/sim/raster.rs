@@ -306,8 +306,8 @@ impl RasterSim {
         let reach = grid.rasterize(&regions.reachable.offset(-opts.tol, crate::model::REGION_TOL));
         let part_top_eff = job.part_top + job.allowance_floor;
         let floor_eff = job.floor + job.allowance_floor;
-        // (row by row in parallel: on a large grid, filling the arrays — and the first touch of
-        // their pages — took as long as a fifth of the planning)
+        // (row by row in parallel: on pocket_islands' 3.9 M cells, filling the arrays — and the
+        // first touch of their pages — took 30–40 ms of a 0.8 s plan on one thread)
         let n = grid.len();
         // (zeroed allocations are mapped lazily, so the first touch of each page happens in
         // the parallel fill as well)
