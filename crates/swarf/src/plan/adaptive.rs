@@ -1086,7 +1086,10 @@ impl<'a, 'b> Engine<'a, 'b> {
             // a full step runs into a wall: where the walls are close round the tool (a channel
             // barely wider than it), a shorter one lets it turn within the room it has — the
             // loops of trochoidal milling — before it gives up to contour milling
-            EngageStep::Wall if self.step_at(c) < self.step => self.engage_step_of(c, alpha_p, self.step_at(c)),
+            EngageStep::Wall => match self.step_at(c) {
+                short if short < self.step => self.engage_step_of(c, alpha_p, short),
+                _ => EngageStep::Wall,
+            },
             es => es,
         }
     }

@@ -174,43 +174,72 @@ struct Stadium {
     a: DVec2,
     b: DVec2,
     r: f64,
-    /// The band's two sides (start and end points), when the segment has a length.
-    sides: Option<[(DVec2, DVec2); 2]>,
+    /// The band's two sides, when the segment has a length.
+    sides: Option<[Side; 2]>,
+}
+
+/// A side of a [`Stadium`]'s band: a point of it, its y-range and dx/dy (none when level: a
+/// level side bounds no row's extent that the end disks do not).
+struct Side {
+    p: DVec2,
+    ylo: f64,
+    yhi: f64,
+    slope: Option<f64>,
 }
 
 impl Stadium {
     fn new(a: DVec2, b: DVec2, r: f64) -> Self {
         let ab = b - a;
+        // (the sides by their slopes: a planner's step reads a hundred rows, and their divisions
+        // and square roots were most of its time)
         let sides = (ab.y.abs() > 1e-12 || ab.x.abs() > 1e-12).then(|| {
             let n = DVec2::new(-ab.y, ab.x).normalize() * r;
-            [(a - n, b - n), (a + n, b + n)]
+            [(a - n, b - n), (a + n, b + n)].map(|(p, q)| {
+                let slope = ((q.y - p.y).abs() > 1e-12).then(|| (q.x - p.x) / (q.y - p.y));
+                Side { p, ylo: q.y.min(p.y), yhi: q.y.max(p.y), slope }
+            })
         });
         Stadium { a, b, r, sides }
     }
 
+    /// Half the chord of the disk of radius `r` round `c` on the row at height `y`.
+    #[inline]
+    fn half(&self, c: DVec2, y: f64) -> Option<f64> {
+        let dy = y - c.y;
+        let w2 = self.r * self.r - dy * dy;
+        (w2 >= 0.0).then(|| w2.sqrt())
+    }
+
     /// Its x-range on the row at height `y`, when the row crosses it: the union of the two end
     /// disks' spans and of the band between them (the stadium is convex, so its extremes on a
-    /// row lie on those).
+    /// row lie on those); with the half chord of the disk at `a` on that row.
     #[inline]
-    fn span(&self, y: f64) -> Option<(f64, f64)> {
+    fn span_and_a(&self, y: f64) -> Option<(f64, f64, Option<f64>)> {
+        let (wa, wb) = (self.half(self.a, y), self.half(self.b, y));
         let mut xlo = f64::INFINITY;
         let mut xhi = f64::NEG_INFINITY;
-        for c in [self.a, self.b] {
-            let dy = y - c.y;
-            let w2 = self.r * self.r - dy * dy;
-            if w2 >= 0.0 {
-                xlo = xlo.min(c.x - w2.sqrt());
-                xhi = xhi.max(c.x + w2.sqrt());
+        if let Some(w) = wa {
+            (xlo, xhi) = (self.a.x - w, self.a.x + w);
+        }
+        if let Some(w) = wb {
+            (xlo, xhi) = (xlo.min(self.b.x - w), xhi.max(self.b.x + w));
+        }
+        for side in self.sides.iter().flatten() {
+            if let Some(m) = side.slope
+                && y >= side.ylo
+                && y <= side.yhi
+            {
+                let x = side.p.x + (y - side.p.y) * m;
+                (xlo, xhi) = (xlo.min(x), xhi.max(x));
             }
         }
-        for (p, q) in self.sides.iter().flatten() {
-            if (p.y - y) * (q.y - y) <= 0.0 && (q.y - p.y).abs() > 1e-12 {
-                let x = p.x + (y - p.y) / (q.y - p.y) * (q.x - p.x);
-                xlo = xlo.min(x);
-                xhi = xhi.max(x);
-            }
-        }
-        (xlo <= xhi).then_some((xlo, xhi))
+        (xlo <= xhi).then_some((xlo, xhi, wa))
+    }
+
+    /// [`Self::span_and_a`] without the chord at `a`.
+    #[inline]
+    fn span(&self, y: f64) -> Option<(f64, f64)> {
+        self.span_and_a(y).map(|(lo, hi, _)| (lo, hi))
     }
 }
 
@@ -649,44 +678,13 @@ impl RasterSim {
         let l2 = ab.length_squared();
         let inv = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
         let (x0, inv_res) = (self.grid.x0, 1.0 / res);
-        // (a column's fractional index by a product, and the band's sides by their slopes: a
-        // step visits a hundred rows, and their divisions and square roots were most of it)
+        // (a column's fractional index by a product: see [`Stadium::new`])
         let col = |x: f64| (x - x0) * inv_res - 0.5;
-        let sides = Stadium::new(a, b, r).sides.map(|sides| {
-            sides.map(|(p, q)| {
-                let slope = if (q.y - p.y).abs() > 1e-12 { Some((q.x - p.x) / (q.y - p.y)) } else { None };
-                (p, q.y.min(p.y), q.y.max(p.y), slope)
-            })
-        });
-        let half = |c: DVec2, y: f64| {
-            let dy = y - c.y;
-            let w2 = r * r - dy * dy;
-            (w2 >= 0.0).then(|| w2.sqrt())
-        };
+        let st = Stadium::new(a, b, r);
         for j in j0..=j1 {
             let y = self.grid.y0 + (j as f64 + 0.5) * res;
-            // x-range of the stadium on this row (see [`Stadium::span`])
-            let (wa, wb) = (half(a, y), half(b, y));
-            let mut xlo = f64::INFINITY;
-            let mut xhi = f64::NEG_INFINITY;
-            if let Some(w) = wa {
-                (xlo, xhi) = (a.x - w, a.x + w);
-            }
-            if let Some(w) = wb {
-                (xlo, xhi) = (xlo.min(b.x - w), xhi.max(b.x + w));
-            }
-            for (p, ylo, yhi, slope) in sides.iter().flatten() {
-                if let Some(m) = slope
-                    && y >= *ylo
-                    && y <= *yhi
-                {
-                    let x = p.x + (y - p.y) * m;
-                    (xlo, xhi) = (xlo.min(x), xhi.max(x));
-                }
-            }
-            if xlo > xhi {
-                continue;
-            }
+            // x-range of the stadium on this row
+            let Some((xlo, xhi, wa)) = st.span_and_a(y) else { continue };
             let i0 = ceil_i(col(xlo)).max(0);
             let i1 = floor_i(col(xhi)).min(nx - 1);
             // cells inside the disk at `a` were cut by the previous step (or are about to be
