@@ -54,9 +54,13 @@
 //! tolerance; the walls are kept at `R` plus both tolerances, so neither can bring the tool into
 //! the part. A start that removes next to nothing is not tried again on that level. Links between
 //! passes stay down through cleared space (rapids at depth, fed while the tool leaves the material
-//! it touches) or lift over it (see [`super`]); because the model cuts cells by their centres, a
-//! cell counted as cut can hold material up to 0.71 cell from its centre, so landings are tested
-//! 1.5 cells and links 0.75 cell beyond the tool.
+//! it touches) — straight when the way is clear, round the material by a way through cleared
+//! space when that is quicker than lifting (see [`super::route`]) — or lift over it (see
+//! [`super`]); a way of at most 1.5 stepovers that crosses only a little material (its engagement,
+//! read against the stock as it is, within the step's slack) is cut instead. A helix start needs
+//! at least 5 % of a tool disk of material within a diameter of its centre. Because the model cuts cells
+//! by their centres, a cell counted as cut can hold material up to 0.71 cell from its centre, so
+//! landings are tested 1.5 cells and links 0.75 cell beyond the tool.
 //! What the passes leave (slivers the ring cannot see, strips along walls too heavy to follow)
 //! is found exactly from the swept area and cleared by [`crate::strategy::cleanup`] passes:
 //! level curves of the wall distance, farthest first, then the wall contour itself — after
@@ -108,6 +112,9 @@ const SETTLE_DEG: f64 = 1.5;
 const BRACKET_RAD: f64 = 0.7 * std::f64::consts::PI / 180.0;
 /// Engagement below which contouring counts as cutting air, degrees.
 const AIR_DEG: f64 = 3.0;
+/// A helix start is made only where at least this share of the tool's disk in material stands
+/// within a tool diameter of its centre.
+const HELIX_MIN_SHARE: f64 = 0.05;
 /// Degrees skipped at the tool's side when looking for the engaged arc (eq. 8).
 const SIDE_SKIP: f64 = 15.0;
 
@@ -498,6 +505,12 @@ impl<'a, 'b> Engine<'a, 'b> {
         }
         // 3. helix at the farthest point from the walls that has material, 4. plunge
         let (c, d) = self.deepest()?;
+        // not for a few slivers within the tool's reach there (the clean-up takes them)
+        if self.l.sim.material_area_near(c, self.z, 2.0 * self.r)
+            < HELIX_MIN_SHARE * std::f64::consts::PI * self.r * self.r
+        {
+            return None;
+        }
         // the grid's distance is good to a cell: measure exactly at the chosen centre
         let d = d.min(self.l.sim.keep_distance(&Path::Line { a: c.extend(0.0), b: c.extend(0.0) }, d + 1.0));
         let room = d - self.r - self.margin - 0.005;
@@ -982,10 +995,30 @@ impl<'a, 'b> Engine<'a, 'b> {
             self.l.link_clear(p, z, t);
             return;
         }
+        // a short way that crosses a little material: cut it when the engagement along it (read
+        // against the stock as it is, which over-reads every point after the first) stays
+        // within the step's slack — a lift over it and a descent cost more than the cut
+        let len = (p - cur.truncate()).length();
+        if self.l.down_at == Some(z) && len > 1e-9 && len <= 1.5 * self.l.step && self.step_allowed(cur.truncate(), p) {
+            let dir = (p - cur.truncate()) / len;
+            let n = (len / self.l.sim.grid.res).ceil().max(1.0) as usize;
+            let light = (1..=n).all(|k| {
+                let q = cur.truncate() + dir * (len * k as f64 / n as f64);
+                self.l.sim.front_engagement(q, z, dir) <= self.theta + STEP_SLACK_DEG
+            });
+            if light {
+                self.l.push_line(MoveKind::Cut, p.extend(z), self.l.feed);
+                return;
+            }
+        }
+        // round the material that stands on the straight way, at depth through cleared space
+        if self.l.down_at == Some(z) && self.l.link_around(p, z) {
+            return;
+        }
         let top = self.l.top_near(p, self.landing_reach());
         let h = (z + self.l.params.approach).max(if top.is_finite() { top + self.l.params.approach } else { z });
         self.l.travel(p, h);
-        self.l.push_line(MoveKind::Descend, p.extend(z), self.l.entry_feed);
+        self.l.push_line(MoveKind::Descend, p.extend(z), self.l.feed);
     }
 
     /// The whole step keeps its clearance from the walls (a step between two allowed points can

@@ -8,10 +8,14 @@
 //!    just cut; with `feed_links`, a feed move (a rapid lifted by a hair when long) for
 //!    controls whose G0 is not straight. Through material only when the step is short (a
 //!    stepover), as a cut.
-//! 2. Otherwise the tool goes up just as far as it must (to the safe height only when the way
-//!    across is not clear), over to the start, and down:
-//!    - a rapid to just above the material and a feed descent when the tool lands in free space
-//!      or cleared space (a lateral entry from outside the stock);
+//! 2. Otherwise the tool goes up just as far as it must — the *minimum retract*: the approach
+//!    height above the highest material along the way, the safe height only when even that is
+//!    not clear — over to the start, and down (the adaptive strategy first looks for a way at
+//!    depth round the material through cleared space, see [`route`], and takes it when it costs
+//!    less time than the lift):
+//!    - a rapid to just above the material and a descent at the cutting feed (the tool touches
+//!      nothing on the way down) when the tool lands in free space or cleared space (a lateral
+//!      entry from outside the stock);
 //!    - otherwise a **helix** around the start when one fits between the part walls, then one
 //!      full turn at depth (paper 1 §4.5: the distance-transform maximum is where a helix fits;
 //!      closed passes are started at their point farthest from the walls);
@@ -30,6 +34,7 @@ use crate::strategy::{Params, Pass, PassKind};
 use crate::toolpath::{MoveKind, Toolpath};
 
 pub mod adaptive;
+pub mod route;
 
 /// Builds the program from the passes of each level (`levels[i] = (z, passes)`), then the
 /// finishing passes of each level.
@@ -153,6 +158,29 @@ impl<'a> Linker<'a> {
 
     /// Retracts and hands over the program.
     fn finish(mut self) -> Toolpath {
+        // the linker starts above a guess of where the first pass begins; the program starts
+        // above where it really does (the travel at the safe height before the first move down
+        // is dropped: the post's opening rapid goes there directly)
+        let start_z = self.tp.start.z;
+        let k = self.tp.moves.iter().take_while(|m| m.is_rapid() && (m.to.z - start_z).abs() < 1e-9).count();
+        if k > 0 && k < self.tp.moves.len() {
+            self.tp.start = self.tp.moves[k - 1].to;
+            self.tp.moves.drain(..k);
+            for n in &mut self.tp.notes {
+                n.at = n.at.saturating_sub(k);
+            }
+        }
+        if std::env::var("SWARF_DEBUG").is_ok() {
+            let mut by: std::collections::BTreeMap<String, (f64, usize)> = Default::default();
+            let mut at = self.tp.start;
+            for m in &self.tp.moves {
+                let e = by.entry(format!("{:?}", m.kind)).or_default();
+                e.0 += (m.to - at).length();
+                e.1 += 1;
+                at = m.to;
+            }
+            eprintln!("moves by kind (chord length mm, count): {by:?}");
+        }
         let end = self.tp.end();
         self.tp.note("end: retract");
         self.tp.rapid(DVec3::new(end.x, end.y, self.safe_z));
@@ -218,7 +246,65 @@ impl<'a> Linker<'a> {
         h as f64
     }
 
-    /// Brings the tool above `target` at height at least `h` (rapids only, through clear space).
+    /// The minimum retract for a rapid from `a` to `b` that cannot go at `z`: the approach
+    /// height above the highest material the tool passes near on the way (the model's top
+    /// within the radius plus the links' margin and half a millimetre), when that is below the
+    /// safe height and the way there is clear of the model and of the part. With fixtures on
+    /// the table the way must also keep off them in plan (a clamp may stand above the stock).
+    fn lowest_clear(&self, a: DVec2, b: DVec2, z: f64) -> Option<f64> {
+        let line = |h: f64| Path::Line { a: a.extend(h), b: b.extend(h) };
+        let top = self.sim.max_height_near(&line(z), self.r + 0.5 + self.clear_margin) as f64;
+        let zl = (top + self.params.approach).max(z);
+        let fixtures_ok = || self.job.fixtures.is_empty() || self.sim.keep_distance(&line(zl), self.r) >= self.r - 1e-6;
+        (zl < self.safe_z - 1e-9
+            && self.sim.is_clear(&line(zl), 0.5 + self.clear_margin)
+            && self.keep_safe(a, b, zl)
+            && fixtures_ok())
+        .then_some(zl)
+    }
+
+    /// What lifting over from the tool's place to `to` (down at `z`) and descending there costs,
+    /// as a length of rapid: the way across, up to the minimum retract and down to the approach
+    /// height by rapids, and the descent from there at the feed.
+    fn lift_cost(&self, to: DVec2, z: f64) -> f64 {
+        let a = self.tp.end().truncate();
+        let up = self.lowest_clear(a, to, z).unwrap_or(self.safe_z) - z;
+        let approach = self.params.approach.min(up);
+        (to - a).length() + 2.0 * up - approach + approach * self.job.rapid_rate / self.feed.max(1e-9)
+    }
+
+    /// Keeps the tool down at `z` on the way to `to` (where it can stand) round the material on
+    /// the straight way, through cleared space, when that costs less than lifting over (see
+    /// [`route`]): rapids at depth, the first fed while the tool leaves the material it touches.
+    /// False when there is no such way.
+    fn link_around(&mut self, to: DVec2, z: f64) -> bool {
+        let cur = self.tp.end();
+        let a = cur.truncate();
+        let h = (0.5 * self.r).max(4.0 * self.sim.grid.res);
+        let reach = self.r + self.clear_margin + 0.75 * h;
+        let budget = self.lift_cost(to, z);
+        let margin = self.clear_margin;
+        let way = route::route(
+            a,
+            to,
+            h,
+            budget,
+            20_000,
+            |p| self.sim.grid.cell_of(p).is_some() && self.top_near(p, reach) <= z + 0.01 && self.keep_safe(p, p, z),
+            |p| self.keep_safe(a, p, z) && self.sim.leaving_distance(cur, p.extend(z), margin).is_some(),
+            |p, q| self.keep_safe(p, q, z) && self.sim.is_clear(&Path::Line { a: p.extend(z), b: q.extend(z) }, margin),
+        );
+        let Some(way) = way else { return false };
+        for (k, w) in way.into_iter().enumerate() {
+            let t = if k == 0 { self.sim.leaving_distance(cur, w.extend(z), margin).unwrap_or(0.0) } else { 0.0 };
+            self.link_clear(w, z, t);
+        }
+        true
+    }
+
+    /// Brings the tool above `target` at height at least `h` (rapids only, through clear space):
+    /// at the height it is at when the way there is clear, else at the minimum retract (see
+    /// [`Self::lowest_clear`]), else at the safe height.
     fn travel(&mut self, target: DVec2, h: f64) {
         let cur = self.tp.end();
         let h = h.min(self.safe_z);
@@ -237,6 +323,9 @@ impl<'a> Linker<'a> {
             || (self.sim.is_clear(&across, 0.5 + self.clear_margin) && self.keep_safe(cur.truncate(), target, z));
         if ok {
             self.push_line(MoveKind::Rapid, target.extend(z), 0.0);
+        } else if let Some(zl) = self.lowest_clear(cur.truncate(), target, z) {
+            self.push_line(MoveKind::Rapid, cur.truncate().extend(zl), 0.0);
+            self.push_line(MoveKind::Rapid, target.extend(zl), 0.0);
         } else {
             self.push_line(MoveKind::Rapid, cur.truncate().extend(self.safe_z), 0.0);
             self.push_line(MoveKind::Rapid, target.extend(self.safe_z), 0.0);
@@ -269,7 +358,7 @@ impl<'a> Linker<'a> {
             let cur = self.tp.end();
             self.push_line(MoveKind::Rapid, cur.truncate().extend(lift), 0.0);
             self.push_line(MoveKind::Rapid, to.extend(lift), 0.0);
-            self.push_line(MoveKind::Descend, to.extend(z), self.entry_feed);
+            self.push_line(MoveKind::Descend, to.extend(z), self.feed);
         } else {
             self.push_line(MoveKind::Link, to.extend(z), self.feed * self.params.feed_boost);
         }
@@ -372,7 +461,7 @@ impl<'a> Linker<'a> {
             // free or cleared space: rapid close, feed the last bit
             let h = (z + approach).max(if top.is_finite() { top + approach } else { z + approach });
             self.travel(start, h);
-            self.push_line(MoveKind::Descend, start.extend(z), self.entry_feed);
+            self.push_line(MoveKind::Descend, start.extend(z), self.feed);
             return;
         }
         // a lateral entry: land in free or cleared space close by and come in sideways
@@ -445,7 +534,7 @@ impl<'a> Linker<'a> {
         let top = self.top_near(p, self.r + crate::strategy::LANDING_MARGIN);
         let h = (z + approach).max(if top.is_finite() { top + approach } else { z + approach });
         self.travel(p, h);
-        self.push_line(MoveKind::Descend, p.extend(z), self.entry_feed);
+        self.push_line(MoveKind::Descend, p.extend(z), self.feed);
         self.tp.note("lateral entry");
         self.push_line(MoveKind::Cut, start.extend(z), self.feed);
     }

@@ -762,6 +762,23 @@ impl RasterSim {
         360.0 * hit as f64 / self.circ.len() as f64
     }
 
+    /// Area (mm²) of the reachable material standing more than `eps` above `z` within `rho` of
+    /// `c` (cells by their centres).
+    pub fn material_area_near(&self, c: DVec2, z: f64, rho: f64) -> f64 {
+        let Some((i0, i1, j0, j1)) = self.grid.range(c - DVec2::splat(rho), c + DVec2::splat(rho)) else { return 0.0 };
+        let top = (z + self.eps) as f32;
+        let mut n = 0usize;
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let k = j * self.grid.nx + i;
+                if self.reach[k] && self.s[k] > top && (self.grid.center(i, j) - c).length_squared() <= rho * rho {
+                    n += 1;
+                }
+            }
+        }
+        n as f64 * self.grid.res * self.grid.res
+    }
+
     /// Material standing more than `eps` above `z` at `q`.
     pub fn material_at(&self, q: DVec2, z: f64) -> bool {
         self.grid.cell_of(q).is_some_and(|(i, j)| self.s[j * self.grid.nx + i] > (z + self.eps) as f32)

@@ -98,7 +98,8 @@ pub struct Params {
     pub clearance: f64,
     /// Height above material from which to start entries and descents, mm.
     pub approach: f64,
-    /// Plunge and descent feed as a fraction of the cutting feed.
+    /// Plunge feed as a fraction of the cutting feed. Descents to a level into free or
+    /// cleared space (the tool touches nothing on the way down) run at the cutting feed.
     pub entry_feed_frac: f64,
     /// Helix and ramp feed as a fraction of the cutting feed (along the path: at a 3° ramp the
     /// tool descends at 5 % of it; FreeCAD's Adaptive and most CAM systems ramp at the cutting
