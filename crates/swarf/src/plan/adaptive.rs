@@ -58,9 +58,9 @@
 //! space when that is quicker than lifting (see [`super::route`]) — or lift over it (see
 //! [`super`]); a way of at most 1.5 stepovers that crosses only a little material (its engagement,
 //! read against the stock as it is, within the step's slack) is cut instead. A helix start needs
-//! at least 5 % of a tool disk of material within a diameter of its centre. Because the model cuts cells
-//! by their centres, a cell counted as cut can hold material up to 0.71 cell from its centre, so
-//! landings are tested 1.5 cells and links 0.75 cell beyond the tool.
+//! at least 5 % of a tool disk of material within a diameter of its centre. Because the model
+//! cuts cells by their centres, a cell counted as cut can hold material up to 0.71 cell from its
+//! centre, so landings are tested 1.5 cells and links 0.75 cell beyond the tool.
 //! What the passes leave (slivers the ring cannot see, strips along walls too heavy to follow)
 //! is found exactly from the swept area and cleared by [`crate::strategy::cleanup`] passes:
 //! level curves of the wall distance, farthest first, then the wall contour itself — after

@@ -255,12 +255,15 @@ impl<'a> Linker<'a> {
         let line = |h: f64| Path::Line { a: a.extend(h), b: b.extend(h) };
         let top = self.sim.max_height_near(&line(z), self.r + 0.5 + self.clear_margin) as f64;
         let zl = (top + self.params.approach).max(z);
-        let fixtures_ok = || self.job.fixtures.is_empty() || self.sim.keep_distance(&line(zl), self.r) >= self.r - 1e-6;
-        (zl < self.safe_z - 1e-9
-            && self.sim.is_clear(&line(zl), 0.5 + self.clear_margin)
-            && self.keep_safe(a, b, zl)
-            && fixtures_ok())
-        .then_some(zl)
+        // off the part (and, with fixtures, off the part and the fixtures in plan at any height)
+        let kept = || {
+            if self.job.fixtures.is_empty() {
+                self.keep_safe(a, b, zl)
+            } else {
+                self.sim.keep_distance(&line(zl), self.r) >= self.r - 1e-6
+            }
+        };
+        (zl < self.safe_z - 1e-9 && self.sim.is_clear(&line(zl), 0.5 + self.clear_margin) && kept()).then_some(zl)
     }
 
     /// What lifting over from the tool's place to `to` (down at `z`) and descending there costs,

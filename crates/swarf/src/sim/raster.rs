@@ -765,17 +765,12 @@ impl RasterSim {
     /// Area (mm²) of the reachable material standing more than `eps` above `z` within `rho` of
     /// `c` (cells by their centres).
     pub fn material_area_near(&self, c: DVec2, z: f64, rho: f64) -> f64 {
-        let Some((i0, i1, j0, j1)) = self.grid.range(c - DVec2::splat(rho), c + DVec2::splat(rho)) else { return 0.0 };
-        let top = (z + self.eps) as f32;
+        let at = Path::Line { a: c.extend(z), b: c.extend(z) };
         let mut n = 0usize;
-        for j in j0..=j1 {
-            for i in i0..=i1 {
-                let k = j * self.grid.nx + i;
-                if self.reach[k] && self.s[k] > top && (self.grid.center(i, j) - c).length_squared() <= rho * rho {
-                    n += 1;
-                }
-            }
-        }
+        visit_above(&self.grid, &self.s, Some((&self.bmax, self.nbx)), &at, rho, self.eps, |k, _, _| {
+            n += usize::from(self.reach[k]);
+            true
+        });
         n as f64 * self.grid.res * self.grid.res
     }
 
