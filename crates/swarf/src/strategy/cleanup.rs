@@ -102,7 +102,7 @@ pub fn passes_for_leftover(g: &LayerGeom, params: &Params, left: &Area, cell: f6
             .map(|phi| (1.0 / (0.5 * phi).cos().max(0.1) - 1.0) * phi * g.r * 0.5)
             .sum();
         let rho = (CORNER_ROUND * g.r).min(REST_BUDGET * g.reachable.area() / per_rho.max(1e-12));
-        let rings: Vec<Vec<DVec2>> = g.walls.rings().map(|r| fillet_away(r, rho)).collect();
+        let rings = round_corners(&g.walls, rho);
         out.extend(super::offset::rings_passes(&rings, g.wall_level, &zone, params, true, PassKind::Cleanup));
     }
     out
@@ -178,6 +178,37 @@ fn away_turns(ring: &[DVec2]) -> Vec<f64> {
     (0..ring.len()).filter_map(|i| away_turn(ring, i).map(|(phi, _, _)| phi)).collect()
 }
 
+/// The wall contours of `walls` with the corners that turn away from the walls rounded to
+/// radius `rho`: the morphological closing of the walls (grown by `rho`, shrunk back, united
+/// with the walls so that no contour comes closer to them), whose fillets span as many edges as
+/// they need (the contour of a wall arc meeting a straight wall is a polygon of short edges, where
+/// a fillet within half of each neighbouring edge is a few hundredths of a mm).
+///
+/// The closing also shuts channels narrower than `2·rho` between walls, where the contour must
+/// go; when it fills more than the corners' fillets would (twice their area, rho²·(tan(φ/2) −
+/// φ/2) at a turn by φ) or changes the number of contours, each contour is rounded vertex by
+/// vertex instead ([`fillet_away`]).
+fn round_corners(walls: &Area, rho: f64) -> Vec<Vec<DVec2>> {
+    let by_vertex = || walls.rings().map(|r| fillet_away(r, rho)).collect::<Vec<_>>();
+    if rho <= 0.0 || walls.is_empty() {
+        return by_vertex();
+    }
+    let closed = walls.union(&walls.offset(rho, CLOSE_TOL).offset(-rho, CLOSE_TOL));
+    let fillets: f64 = walls
+        .rings()
+        .flat_map(|r| away_turns(r).into_iter())
+        .map(|phi| rho * rho * ((0.5 * phi).min(1.5).tan() - 0.5 * phi.min(3.0)).max(0.0))
+        .sum();
+    let filled = closed.area() - walls.area();
+    if closed.rings().count() != walls.rings().count() || filled > 2.0 * fillets + rho * CLOSE_TOL * 4.0 {
+        return by_vertex();
+    }
+    closed.rings().cloned().collect()
+}
+
+/// Offset tolerance of [`round_corners`]' closing, mm.
+const CLOSE_TOL: f64 = 0.002;
+
 /// `ring` (a wall contour: the walls on its left) with every corner that turns away from the
 /// walls by more than a few degrees replaced by an arc of radius `rho` (within half of each
 /// neighbouring edge). The arc lies on the side away from the walls, so the tool only keeps
@@ -209,4 +240,51 @@ fn fillet_away(ring: &[DVec2], rho: f64) -> Vec<DVec2> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dist_to_rings(p: DVec2, rings: &[Vec<DVec2>]) -> f64 {
+        rings
+            .iter()
+            .flat_map(|r| (0..r.len()).map(move |i| crate::geom::dist_point_segment(p, r[i], r[(i + 1) % r.len()])))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// A wall arc (a fine polygon) meeting a straight wall at a right angle: the contour's corner
+    /// is rounded to the full radius, although every edge of the arc is far shorter than the
+    /// fillet (the vertex-by-vertex fillet is limited to half an edge there).
+    #[test]
+    fn rounds_a_corner_between_an_arc_and_a_line() {
+        let walls = Area::rect(-20.0, -10.0, 20.0, 0.0).union(&Area::disk(DVec2::ZERO, 5.0, 0.001));
+        let rho = 1.0;
+        let corner = DVec2::new(5.0, 0.0);
+        let rounded = round_corners(&walls, rho);
+        // the fillet is tangent to the line and the arc: centre ρ above the line, 5 + ρ from
+        // the arc's centre
+        let centre = DVec2::new(((5.0 + rho) * (5.0 + rho) - rho * rho).sqrt(), rho);
+        let d = dist_to_rings(corner, &rounded);
+        assert!((d - (corner.distance(centre) - rho)).abs() < 0.01, "corner {d:.3} mm off the contour");
+        let by_vertex: Vec<Vec<DVec2>> = walls.rings().map(|r| fillet_away(r, rho)).collect();
+        assert!(dist_to_rings(corner, &by_vertex) < 0.1);
+        // the contour never comes nearer the walls than the original one
+        for r in &rounded {
+            for &p in r {
+                assert!(!walls.offset(-0.005, 0.001).contains(p), "{p:?} inside the walls");
+            }
+        }
+    }
+
+    /// A channel narrower than 2ρ between two walls: the closing would shut it, so the contours
+    /// are rounded vertex by vertex and still run down the channel.
+    #[test]
+    fn keeps_a_channel_narrower_than_the_fillets() {
+        let walls = Area::rect(-20.0, -10.0, 20.0, 10.0).difference(&Area::rect(-20.0, -0.5, 10.0, 0.5));
+        let rho = 1.0;
+        let rounded = round_corners(&walls, rho);
+        assert!(dist_to_rings(DVec2::new(0.0, 0.5), &rounded) < 1e-6);
+        assert!(dist_to_rings(DVec2::new(0.0, -0.5), &rounded) < 1e-6);
+    }
 }
