@@ -3,6 +3,7 @@
 
 pub mod case;
 pub mod drawing;
+pub mod stl;
 
 use crate::error::{Error, Result};
 use crate::model::Job;

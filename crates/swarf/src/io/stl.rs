@@ -1,0 +1,391 @@
+//! STL meshes, binary and ASCII.
+//!
+//! Written by hand rather than with a crate: the reader must name the place of every defect in
+//! the file (the line of an ASCII facet, the index and byte offset of a binary one), tell the
+//! two encodings apart by the file's size rather than by its first word (binary files from
+//! several exporters start with `solid`), and keep going over degenerate facets, which it drops
+//! and counts; the STL readers on crates.io return a bare `io::Error` and stop at the first
+//! oddity.
+//!
+//! A binary STL is an 80-byte header, a little-endian `u32` facet count and 50 bytes per facet
+//! (normal, three vertices as `f32`, a 2-byte attribute); the file is binary exactly when its size
+//! is `84 + 50·n`. An ASCII STL is `solid name`, facets `facet normal nx ny nz / outer loop /
+//! vertex x y z` ×3 `/ endloop / endfacet`, and `endsolid`; several solids may follow each other.
+//! The normals are ignored (the vertex order gives the orientation, and many files have zero or
+//! wrong normals).
+
+use crate::error::{Error, Result};
+use crate::geom::DVec3;
+use std::path::Path;
+
+/// A triangle soup with what reading it found.
+#[derive(Debug, Clone, Default)]
+pub struct Mesh {
+    /// Triangles, vertices counter-clockwise seen from outside.
+    pub tris: Vec<[DVec3; 3]>,
+    /// Facets dropped as degenerate (zero area or repeated vertices).
+    pub dropped: usize,
+    /// True when the file was binary.
+    pub binary: bool,
+}
+
+/// Relative area below which a facet counts as degenerate (of the square of its longest edge).
+const DEGENERATE: f64 = 1e-12;
+
+impl Mesh {
+    /// Reads an STL file.
+    pub fn read(path: &Path) -> Result<Mesh> {
+        let bytes = std::fs::read(path).map_err(|e| Error::input(path, "file", format!("cannot read: {e}")))?;
+        Self::parse(path, &bytes)
+    }
+
+    /// Parses the bytes of an STL file (`path` names it in errors).
+    pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+        let mesh = if is_binary(bytes) {
+            parse_binary(path, bytes)?
+        } else if starts_with_solid(bytes) {
+            parse_ascii(path, bytes)?
+        } else if bytes.len() < 84 {
+            return Err(Error::input(
+                path,
+                "file",
+                format!(
+                    "{} bytes: too short for a binary STL (84 bytes of header) and not ASCII STL (no \"solid\")",
+                    bytes.len()
+                ),
+            ));
+        } else {
+            let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
+            return Err(Error::input(
+                path,
+                "file",
+                format!(
+                    "not an STL file: not ASCII (does not start with \"solid\") and not binary (the header counts {n} facets, which take {} bytes, but the file has {})",
+                    84 + 50 * n,
+                    bytes.len()
+                ),
+            ));
+        };
+        if mesh.tris.is_empty() {
+            return Err(Error::input(
+                path,
+                "file",
+                if mesh.dropped > 0 {
+                    format!("all {} facets are degenerate (zero area): no surface to machine", mesh.dropped)
+                } else {
+                    "the mesh has no facets".to_string()
+                },
+            ));
+        }
+        Ok(mesh)
+    }
+
+    /// Bounding box (min, max); `None` when empty.
+    pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
+        let mut it = self.tris.iter().flatten();
+        let first = *it.next()?;
+        Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
+    }
+
+    /// Applies a placement: scale, then rotations about X, Y and Z (degrees, right-handed, in
+    /// that order), then a translation. A mirroring scale (negative) keeps the facets facing
+    /// outwards by reversing their vertex order.
+    pub fn transform(&mut self, t: &Placement) {
+        let (sx, cx) = t.rotate_deg[0].to_radians().sin_cos();
+        let (sy, cy) = t.rotate_deg[1].to_radians().sin_cos();
+        let (sz, cz) = t.rotate_deg[2].to_radians().sin_cos();
+        let f = |p: DVec3| {
+            let p = p * t.scale;
+            let p = DVec3::new(p.x, cx * p.y - sx * p.z, sx * p.y + cx * p.z);
+            let p = DVec3::new(cy * p.x + sy * p.z, p.y, -sy * p.x + cy * p.z);
+            let p = DVec3::new(cz * p.x - sz * p.y, sz * p.x + cz * p.y, p.z);
+            p + t.translate
+        };
+        for tri in &mut self.tris {
+            for v in tri.iter_mut() {
+                *v = f(*v);
+            }
+            if t.scale < 0.0 {
+                tri.swap(1, 2);
+            }
+        }
+    }
+
+    /// Edges used by exactly one facet (after welding vertices that coincide within `tol`): zero
+    /// for a closed surface.
+    pub fn open_edges(&self, tol: f64) -> usize {
+        use std::collections::HashMap;
+        let key = |p: DVec3| ((p.x / tol).round() as i64, (p.y / tol).round() as i64, (p.z / tol).round() as i64);
+        let mut count: HashMap<_, i32> = HashMap::new();
+        for t in &self.tris {
+            for k in 0..3 {
+                let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
+                if a == b {
+                    continue;
+                }
+                let e = if a < b { (a, b) } else { (b, a) };
+                *count.entry(e).or_default() += 1;
+            }
+        }
+        count.values().filter(|&&c| c == 1).count()
+    }
+}
+
+/// Where a mesh goes: `p' = Rz·Ry·Rx·(scale·p) + translate`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// Uniform scale (25.4 for a part drawn in inches, 1000 for metres).
+    pub scale: f64,
+    /// Rotations about X, Y, Z in degrees, applied in that order (−90 about X turns a Y-up part
+    /// Z-up).
+    pub rotate_deg: [f64; 3],
+    /// Translation after scaling and rotating, mm.
+    pub translate: DVec3,
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Placement { scale: 1.0, rotate_deg: [0.0; 3], translate: DVec3::ZERO }
+    }
+}
+
+impl Placement {
+    /// True when it moves nothing.
+    pub fn is_identity(&self) -> bool {
+        *self == Placement::default()
+    }
+}
+
+fn is_binary(bytes: &[u8]) -> bool {
+    bytes.len() >= 84 && {
+        let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
+        bytes.len() as u64 == 84 + 50 * n
+    }
+}
+
+fn starts_with_solid(bytes: &[u8]) -> bool {
+    let s = bytes.iter().position(|b| !b.is_ascii_whitespace()).map_or(&[][..], |i| &bytes[i..]);
+    s.len() >= 5 && s[..5].eq_ignore_ascii_case(b"solid")
+}
+
+/// Adds a facet unless it is degenerate.
+fn push(mesh: &mut Mesh, t: [DVec3; 3]) {
+    let n = (t[1] - t[0]).cross(t[2] - t[0]);
+    let l2 = (t[1] - t[0]).length_squared().max((t[2] - t[1]).length_squared()).max((t[0] - t[2]).length_squared());
+    if n.length_squared() <= DEGENERATE * l2 * l2 || l2 == 0.0 {
+        mesh.dropped += 1;
+    } else {
+        mesh.tris.push(t);
+    }
+}
+
+fn parse_binary(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+    let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
+    let mut mesh = Mesh { tris: Vec::with_capacity(n), dropped: 0, binary: true };
+    let f = |o: usize| f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]) as f64;
+    for i in 0..n {
+        let o = 84 + 50 * i;
+        let mut t = [DVec3::ZERO; 3];
+        for (k, v) in t.iter_mut().enumerate() {
+            let b = o + 12 + 12 * k;
+            *v = DVec3::new(f(b), f(b + 4), f(b + 8));
+            if !v.is_finite() {
+                return Err(Error::input(
+                    path,
+                    format!("facet {} (byte {}), vertex {}", i + 1, b, k + 1),
+                    format!("coordinate is not a finite number ({v})"),
+                ));
+            }
+        }
+        push(&mut mesh, t);
+    }
+    Ok(mesh)
+}
+
+fn parse_ascii(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        let line = bytes[..e.valid_up_to()].iter().filter(|&&b| b == b'\n').count() + 1;
+        Error::input(path, format!("line {line}"), "not UTF-8 text, and the size does not fit a binary STL")
+    })?;
+    // tokens with their line numbers
+    let mut toks = text.lines().enumerate().flat_map(|(i, l)| l.split_whitespace().map(move |w| (i + 1, w))).peekable();
+    let mut mesh = Mesh::default();
+    let mut last_line = 1;
+    let err = |line: usize, what: String| Error::input(path, format!("line {line}"), what);
+    macro_rules! next {
+        ($what:expr) => {
+            match toks.next() {
+                Some((l, w)) => {
+                    last_line = l;
+                    (l, w)
+                }
+                None => return Err(err(last_line, format!("unexpected end of file: expected {}", $what))),
+            }
+        };
+    }
+    macro_rules! expect {
+        ($word:expr) => {{
+            let (l, w) = next!(format!("\"{}\"", $word));
+            if !w.eq_ignore_ascii_case($word) {
+                return Err(err(l, format!("expected \"{}\", found \"{}\"", $word, w)));
+            }
+        }};
+    }
+    let mut solids = 0;
+    while toks.peek().is_some() {
+        let (l, w) = next!("\"solid\"");
+        if !w.eq_ignore_ascii_case("solid") {
+            return Err(err(l, format!("expected \"solid\", found \"{w}\"")));
+        }
+        solids += 1;
+        // the name: the rest of the line
+        while toks.peek().is_some_and(|(ll, _)| *ll == l) {
+            toks.next();
+        }
+        loop {
+            let (l, w) = next!("\"facet\" or \"endsolid\"");
+            if w.eq_ignore_ascii_case("endsolid") {
+                while toks.peek().is_some_and(|(ll, _)| *ll == l) {
+                    toks.next();
+                }
+                break;
+            }
+            if !w.eq_ignore_ascii_case("facet") {
+                return Err(err(l, format!("expected \"facet\" or \"endsolid\", found \"{w}\"")));
+            }
+            expect!("normal");
+            for _ in 0..3 {
+                let (l, w) = next!("a normal component");
+                w.parse::<f64>().map_err(|_| err(l, format!("normal component \"{w}\" is not a number")))?;
+            }
+            expect!("outer");
+            expect!("loop");
+            let mut t = [DVec3::ZERO; 3];
+            for v in &mut t {
+                expect!("vertex");
+                let mut c = [0.0; 3];
+                for x in &mut c {
+                    let (l, w) = next!("a vertex coordinate");
+                    *x = w
+                        .parse::<f64>()
+                        .ok()
+                        .filter(|x| x.is_finite())
+                        .ok_or_else(|| err(l, format!("vertex coordinate \"{w}\" is not a finite number")))?;
+                }
+                *v = DVec3::from_array(c);
+            }
+            let (l, w) = next!("\"endloop\"");
+            if w.eq_ignore_ascii_case("vertex") {
+                return Err(err(l, "a facet with more than 3 vertices (only triangles are STL)".to_string()));
+            }
+            if !w.eq_ignore_ascii_case("endloop") {
+                return Err(err(l, format!("expected \"endloop\", found \"{w}\"")));
+            }
+            expect!("endfacet");
+            push(&mut mesh, t);
+        }
+    }
+    if solids == 0 {
+        return Err(err(1, "no \"solid\"".to_string()));
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const CUBE_FACETS: [[[f64; 3]; 3]; 2] =
+        [[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]], [[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0]]];
+
+    fn ascii(facets: &[[[f64; 3]; 3]]) -> String {
+        let mut s = String::from("solid test\n");
+        for f in facets {
+            s += "  facet normal 0 0 1\n    outer loop\n";
+            for v in f {
+                s += &format!("      vertex {} {} {}\n", v[0], v[1], v[2]);
+            }
+            s += "    endloop\n  endfacet\n";
+        }
+        s + "endsolid test\n"
+    }
+
+    fn binary(facets: &[[[f64; 3]; 3]], header: &[u8]) -> Vec<u8> {
+        let mut b = vec![0u8; 80];
+        b[..header.len()].copy_from_slice(header);
+        b.extend((facets.len() as u32).to_le_bytes());
+        for f in facets {
+            b.extend([0u8; 12]);
+            for v in f {
+                for x in v {
+                    b.extend((*x as f32).to_le_bytes());
+                }
+            }
+            b.extend([0u8; 2]);
+        }
+        b
+    }
+
+    #[test]
+    fn reads_ascii_and_binary_alike() {
+        let p = Path::new("t.stl");
+        let a = Mesh::parse(p, ascii(&CUBE_FACETS).as_bytes()).unwrap();
+        // a binary file whose header starts with "solid" is still binary
+        let b = Mesh::parse(p, &binary(&CUBE_FACETS, b"solid but binary")).unwrap();
+        assert!(!a.binary && b.binary);
+        assert_eq!(a.tris, b.tris);
+        assert_eq!(a.tris.len(), 2);
+        assert_eq!(a.bounds().unwrap(), (DVec3::ZERO, DVec3::ONE));
+    }
+
+    #[test]
+    fn drops_degenerate_facets() {
+        let mut f = CUBE_FACETS.to_vec();
+        f.push([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0]]);
+        let m = Mesh::parse(Path::new("t.stl"), ascii(&f).as_bytes()).unwrap();
+        assert_eq!((m.tris.len(), m.dropped), (2, 1));
+        let e = Mesh::parse(Path::new("t.stl"), ascii(&f[2..]).as_bytes()).unwrap_err().to_string();
+        assert!(e.contains("degenerate"), "{e}");
+    }
+
+    #[test]
+    fn names_the_line_of_a_bad_ascii_facet() {
+        let text = ascii(&CUBE_FACETS).replacen("vertex 1 1 0", "vertex 1 x 0", 1);
+        let e = Mesh::parse(Path::new("bad.stl"), text.as_bytes()).unwrap_err().to_string();
+        assert!(e.starts_with("bad.stl: line 6: vertex coordinate \"x\""), "{e}");
+        let text = ascii(&CUBE_FACETS).replacen("endloop", "vertex 0 0 0", 1);
+        let e = Mesh::parse(Path::new("bad.stl"), text.as_bytes()).unwrap_err().to_string();
+        assert!(e.contains("line 7") && e.contains("more than 3 vertices"), "{e}");
+        let text = &ascii(&CUBE_FACETS)[..60];
+        let e = Mesh::parse(Path::new("bad.stl"), text.as_bytes()).unwrap_err().to_string();
+        assert!(e.contains("unexpected end of file"), "{e}");
+    }
+
+    #[test]
+    fn names_a_truncated_binary_file() {
+        let mut b = binary(&CUBE_FACETS, b"bin");
+        b.truncate(b.len() - 7);
+        let e = Mesh::parse(Path::new("cut.stl"), &b).unwrap_err().to_string();
+        assert!(e.contains("header counts 2 facets, which take 184 bytes, but the file has 177"), "{e}");
+        let mut b = binary(&CUBE_FACETS, b"bin");
+        b[84 + 12..84 + 16].copy_from_slice(&f32::NAN.to_le_bytes());
+        let e = Mesh::parse(Path::new("nan.stl"), &b).unwrap_err().to_string();
+        assert!(e.contains("facet 1 (byte 96), vertex 1"), "{e}");
+    }
+
+    #[test]
+    fn places_a_y_up_inch_part() {
+        let mut m = Mesh::parse(Path::new("t.stl"), ascii(&CUBE_FACETS).as_bytes()).unwrap();
+        m.transform(&Placement { scale: 25.4, rotate_deg: [-90.0, 0.0, 0.0], translate: DVec3::new(0.0, 0.0, 1.0) });
+        let (lo, hi) = m.bounds().unwrap();
+        // (x, y, z) → (x, z, −y)
+        assert!((lo - DVec3::new(0.0, 0.0, -24.4)).length() < 1e-9, "{lo}");
+        assert!((hi - DVec3::new(25.4, 25.4, 1.0)).length() < 1e-9, "{hi}");
+    }
+
+    #[test]
+    fn counts_open_edges() {
+        let m = Mesh::parse(Path::new("t.stl"), ascii(&CUBE_FACETS).as_bytes()).unwrap();
+        assert_eq!(m.open_edges(1e-6), 6);
+    }
+}
