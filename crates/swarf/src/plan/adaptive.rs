@@ -146,7 +146,7 @@ pub fn link_adaptive(
         // passes, before the next level so that neither they nor the next level's passes cut
         // deeper than one step-down
         let left = eng.l.sim.material_area(*z);
-        if left.is_empty() {
+        if left.is_empty() && !params.full_wall_contour {
             continue;
         }
         let extra = crate::strategy::cleanup::passes_for_leftover(geom, params, &left, eng.l.sim.grid.res);
@@ -292,6 +292,9 @@ enum Start {
     Lateral { at: DVec2, from: DVec2, dir: f64 },
     /// Helix of radius `r` around `c`.
     Helix { c: DVec2, r: f64 },
+    /// Ramp back and forth along the straight line from `c` to `to` (no room for a helix), ending
+    /// at `c`.
+    Ramp { c: DVec2, to: DVec2 },
     /// Plunge at `c` (nothing else fits).
     Plunge { c: DVec2 },
 }
@@ -426,6 +429,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                 Start::Resume { .. } => "resume",
                 Start::Lateral { .. } => "lateral",
                 Start::Helix { .. } => "helix",
+                Start::Ramp { .. } => "ramp",
                 Start::Plunge { .. } => "plunge",
             };
             let lateral_at = match &start {
@@ -518,10 +522,47 @@ impl<'a, 'b> Engine<'a, 'b> {
         if rh >= self.l.params.helix_min_frac * self.r {
             Some(Start::Helix { c, r: rh })
         } else if room >= 0.0 {
-            Some(Start::Plunge { c })
+            Some(match self.ramp_line(c) {
+                Some(to) => Start::Ramp { c, to },
+                None => Start::Plunge { c },
+            })
         } else {
             None
         }
+    }
+
+    /// Where a straight ramp from `c` can run, for a start with no room for a helix (a channel
+    /// about as wide as the tool): the far end of the longest straight way from `c`, among 24
+    /// headings, along which the tool stays clear of the walls (by the margin), up to three
+    /// diameters; none shorter than half a diameter (or 1 mm).
+    fn ramp_line(&self, c: DVec2) -> Option<DVec2> {
+        let need = self.r + self.margin + 0.005;
+        let max = 6.0 * self.r;
+        let min = self.r.max(1.0);
+        let clear = |b: DVec2| self.l.sim.keep_distance(&Path::Line { a: c.extend(0.0), b: b.extend(0.0) }, need + 1.0) >= need;
+        let mut best: Option<(f64, DVec2)> = None;
+        for k in 0..24 {
+            let a = std::f64::consts::TAU * k as f64 / 24.0;
+            let u = DVec2::new(a.cos(), a.sin());
+            // longest clear length by bisection over [0, max]
+            let (mut lo, mut hi) = (0.0, max);
+            if clear(c + u * max) {
+                lo = max;
+            } else {
+                for _ in 0..12 {
+                    let mid = 0.5 * (lo + hi);
+                    if clear(c + u * mid) {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+            }
+            if lo >= min && best.is_none_or(|(l, _)| lo > l + 1e-9) {
+                best = Some((lo, c + u * lo));
+            }
+        }
+        best.map(|(_, to)| to)
     }
 
     /// No material within the tool (plus the landing margin) at `p`. The model's cells are
@@ -805,6 +846,14 @@ impl<'a, 'b> Engine<'a, 'b> {
                 let p = c + r * DVec2::new(a_end.cos(), a_end.sin());
                 let s = if self.climb { 1.0 } else { -1.0 };
                 (p, a_end + s * FRAC_PI_2, Mode::Engage)
+            }
+            Start::Ramp { c, to } => {
+                let line = Path::Line { a: c.extend(0.0), b: to.extend(0.0) };
+                let top = (self.l.sim.max_height_near(&line, self.r + 0.05) as f64).max(z);
+                self.l.ramp(&[c, to], top + self.l.params.approach, z);
+                let d = to - c;
+                let s = if self.climb { 1.0 } else { -1.0 };
+                (c, d.y.atan2(d.x) + s * FRAC_PI_2, Mode::Engage)
             }
             Start::Plunge { c } => {
                 let top = self.l.top_near(c, self.r);
