@@ -7,6 +7,7 @@ use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use swarf::io::Overrides;
+use swarf::io::case::Input;
 use swarf::model::Width;
 use swarf::pipeline::{RoughOptions, RoughResult, Stage};
 use swarf::post::Post;
@@ -22,7 +23,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Cmd {
-    /// Rough a job (case JSON, DXF or SVG): write G-code, and optionally a report and pictures.
+    /// Rough a job (case JSON, STL part, DXF or SVG): write G-code, and optionally a report and
+    /// pictures.
     Rough(RoughArgs),
     /// Run the built-in example (a pocket with two islands) and write everything into a folder.
     Demo {
@@ -142,6 +144,19 @@ struct CommonOpts {
     /// Tolerance for joining loose drawing entities into contours, mm.
     #[arg(long, value_name = "MM", default_value_t = 0.01, allow_negative_numbers = true)]
     chain_tolerance: f64,
+    /// STL part on its own: scale (25.4 for inches; `--units` works too).
+    #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
+    part_scale: Option<f64>,
+    /// STL part on its own: rotations about X, Y and Z in degrees, in that order (−90,0,0 turns a
+    /// Y-up part Z-up).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    part_rotate: Option<String>,
+    /// STL part on its own: translation after scaling and rotating, mm.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    part_translate: Option<String>,
+    /// STL part on its own: the stock box is its bounds grown by this sideways and on top, mm.
+    #[arg(long, value_name = "MM", default_value_t = 2.0, allow_negative_numbers = true)]
+    stock_margin: f64,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -149,7 +164,7 @@ struct CommonOpts {
 
 #[derive(Args)]
 struct RoughArgs {
-    /// Input: a case (.json), a DXF or an SVG drawing.
+    /// Input: a case (.json, 2.5D or 3D), an STL part, a DXF or an SVG drawing.
     input: PathBuf,
     /// G-code output (default: the input's name with .ngc, in the current folder).
     #[arg(short, long, value_name = "OUT.ngc")]
@@ -217,7 +232,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn overrides(o: &CommonOpts) -> Overrides {
+fn overrides(o: &CommonOpts) -> Result<Overrides, Failure> {
     let mut ov = Overrides {
         tool_diameter: o.tool_diameter,
         width: match (o.engagement, o.stepover) {
@@ -239,7 +254,32 @@ fn overrides(o: &CommonOpts) -> Overrides {
         UnitsArg::Cm => swarf::swarf_import::Units::Centimetre,
         UnitsArg::M => swarf::swarf_import::Units::Metre,
     });
-    ov
+    let triple = |v: &Option<String>, name: &str| -> Result<Option<[f64; 3]>, Failure> {
+        let Some(t) = v else { return Ok(None) };
+        let parts: Vec<Option<f64>> =
+            t.split(',').map(|x| x.trim().parse::<f64>().ok().filter(|v| v.is_finite())).collect();
+        match parts.as_slice() {
+            [Some(a), Some(b), Some(c)] => Ok(Some([*a, *b, *c])),
+            _ => Err(swarf::Error::param(name, format!("{t:?}: expected three numbers X,Y,Z")).into()),
+        }
+    };
+    if let Some(r) = triple(&o.part_rotate, "--part-rotate")? {
+        ov.placement.rotate_deg = r;
+    }
+    if let Some(t) = triple(&o.part_translate, "--part-translate")? {
+        ov.placement.translate = swarf::geom::DVec3::from_array(t);
+    }
+    if let Some(sc) = o.part_scale {
+        if !(sc.is_finite() && sc != 0.0) {
+            return Err(swarf::Error::param("--part-scale", format!("{sc}: must be a non-zero number")).into());
+        }
+        ov.placement.scale = sc;
+    }
+    if !(o.stock_margin.is_finite() && o.stock_margin >= 0.0) {
+        return Err(swarf::Error::param("--stock-margin", "must be zero or positive").into());
+    }
+    ov.stock_margin = o.stock_margin;
+    Ok(ov)
 }
 
 fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> {
@@ -294,13 +334,21 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
 }
 
 fn run(job: &swarf::model::Job, opts: &RoughOptions, quiet: bool) -> Result<RoughResult, Failure> {
+    with_bar(quiet, |p| swarf::pipeline::rough(job, opts, p))
+}
+
+/// Runs `f` with a progress bar on a terminal.
+fn with_bar(
+    quiet: bool,
+    f: impl FnOnce(&mut dyn FnMut(Stage, f64)) -> swarf::Result<RoughResult>,
+) -> Result<RoughResult, Failure> {
     let show = !quiet && std::io::stderr().is_terminal();
     let bar = if show { ProgressBar::new(1000) } else { ProgressBar::hidden() };
     bar.set_style(
         ProgressStyle::with_template("{msg:>10} [{bar:40}] {percent:>3}%")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    let res = swarf::pipeline::rough(job, opts, &mut |stage, f| {
+    let res = f(&mut |stage, f| {
         bar.set_message(match stage {
             Stage::Plan => "planning",
             Stage::Simulate => "simulating",
@@ -358,7 +406,20 @@ struct Outputs {
     plot_png: Option<PathBuf>,
 }
 
-fn write_outputs(job: &swarf::model::Job, res: &RoughResult, out: &Outputs) -> Result<(), Failure> {
+/// What the picture draws under the path.
+struct Scene {
+    part: swarf::geom::Area,
+    stock: swarf::geom::Area,
+    fixtures: swarf::geom::Area,
+}
+
+impl Scene {
+    fn of(job: &swarf::model::Job) -> Scene {
+        Scene { part: job.part.clone(), stock: job.stock.clone(), fixtures: job.fixtures.clone() }
+    }
+}
+
+fn write_outputs(scene: &Scene, res: &RoughResult, out: &Outputs) -> Result<(), Failure> {
     // render everything first, then write: no output on failure
     let mut files: Vec<(PathBuf, Vec<u8>)> = vec![(out.gcode.clone(), res.gcode.clone().into_bytes())];
     if let Some(p) = &out.report {
@@ -407,9 +468,9 @@ fn write_outputs(job: &swarf::model::Job, res: &RoughResult, out: &Outputs) -> R
                 res.report.engagement_deg.p95,
                 res.report.time_min
             ),
-            part: &job.part,
-            stock: &job.stock,
-            fixtures: &job.fixtures,
+            part: &scene.part,
+            stock: &scene.stock,
+            fixtures: &scene.fixtures,
             toolpath: &res.toolpath,
             replay,
             ref_deg: res.report.engagement_ref_deg,
@@ -444,10 +505,14 @@ fn summary(r: &swarf::report::Report) -> String {
 }
 
 fn rough(a: RoughArgs) -> Result<(), Failure> {
-    let job = swarf::io::load_job(&a.input, &overrides(&a.opts))?;
+    let input = swarf::io::load_input(&a.input, &overrides(&a.opts)?)?;
     let name = a.input.file_name().and_then(|s| s.to_str()).unwrap_or("input").to_string();
     let opts = options(&a.opts, name)?;
-    let gcode = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.ngc", job.name)));
+    let stem = match &input {
+        Input::Flat(j) => j.name.clone(),
+        Input::Mesh(j) => j.name.clone(),
+    };
+    let gcode = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{stem}.ngc")));
     let (plot_svg, plot_png) = match &a.plot {
         None => (None, None),
         Some(p) => match p.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
@@ -456,9 +521,16 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
             _ => (Some(p.with_extension("svg")), Some(p.with_extension("png"))),
         },
     };
-    let res = run(&job, &opts, a.opts.quiet)?;
+    let (res, scene) = match &input {
+        Input::Flat(job) => (run(job, &opts, a.opts.quiet)?, Scene::of(job)),
+        Input::Mesh(job) => {
+            let res = with_bar(a.opts.quiet, |p| swarf::zlevel::rough(job, &opts, p))?;
+            let scene = Scene { part: job.outline(), stock: job.stock_area(), fixtures: swarf::geom::Area::empty() };
+            (res, scene)
+        }
+    };
     write_outputs(
-        &job,
+        &scene,
         &res,
         &Outputs { gcode, report: a.report.clone(), samples: a.samples.clone(), plot_svg, plot_png },
     )?;
@@ -470,7 +542,7 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
 
 fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
     let mut job = swarf::pipeline::example_job();
-    swarf::io::apply(&mut job, &overrides(o));
+    swarf::io::apply(&mut job, &overrides(o)?);
     job.validate()?;
     std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create the folder", dir.display()))?;
     let opts = options(o, "demo_pocket (built-in)".into())?;
@@ -482,7 +554,7 @@ fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
         plot_svg: Some(dir.join("demo.svg")),
         plot_png: Some(dir.join("demo.png")),
     };
-    write_outputs(&job, &res, &out)?;
+    write_outputs(&Scene::of(&job), &res, &out)?;
     std::fs::write(dir.join("demo_pocket.json"), include_str!("../../swarf/examples_data/demo_pocket.json"))
         .with_context(|| format!("{}: cannot write", dir.display()))?;
     if !o.quiet {

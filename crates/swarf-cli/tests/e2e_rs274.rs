@@ -412,3 +412,49 @@ fn interpreter_errors_are_caught() {
     assert!((c.feed_length - want).abs() < 1e-3, "{} vs {want}", c.feed_length);
     assert_eq!((c.traverses, c.feeds, c.arcs), (1, 1, 1));
 }
+
+/// A 3D case: a 60 × 60 × 10 mm block with a 30 × 30 mm pocket 6 mm deep (an ASCII STL written
+/// here), z-level roughing.
+#[test]
+fn zlevel_mesh_linuxcnc() {
+    let Some(rs274) = rs274() else { return };
+    let dir = TempDir::new("zlevel-mesh");
+    let mut f: Vec<[[f64; 3]; 3]> = Vec::new();
+    let mut quad = |a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]| {
+        f.push([a, b, c]);
+        f.push([a, c, d]);
+    };
+    let (h, fl, o, i) = (10.0, 4.0, 30.0, 15.0);
+    for (x0, y0, x1, y1) in [(-o, -o, o, -i), (-o, i, o, o), (-o, -i, -i, i), (i, -i, o, i)] {
+        quad([x0, y0, h], [x1, y0, h], [x1, y1, h], [x0, y1, h]);
+    }
+    quad([-i, -i, fl], [i, -i, fl], [i, i, fl], [-i, i, fl]);
+    quad([-i, -i, h], [-i, -i, fl], [i, -i, fl], [i, -i, h]);
+    quad([i, -i, h], [i, -i, fl], [i, i, fl], [i, i, h]);
+    quad([i, i, h], [i, i, fl], [-i, i, fl], [-i, i, h]);
+    quad([-i, i, h], [-i, i, fl], [-i, -i, fl], [-i, -i, h]);
+    quad([-o, -o, 0.0], [-o, o, 0.0], [o, o, 0.0], [o, -o, 0.0]);
+    quad([-o, -o, 0.0], [o, -o, 0.0], [o, -o, h], [-o, -o, h]);
+    quad([o, -o, 0.0], [o, o, 0.0], [o, o, h], [o, -o, h]);
+    quad([o, o, 0.0], [-o, o, 0.0], [-o, o, h], [o, o, h]);
+    quad([-o, o, 0.0], [-o, -o, 0.0], [-o, -o, h], [-o, o, h]);
+    let mut stl = String::from("solid block\n");
+    for t in &f {
+        stl += "facet normal 0 0 0\nouter loop\n";
+        for v in t {
+            stl += &format!("vertex {} {} {}\n", v[0], v[1], v[2]);
+        }
+        stl += "endloop\nendfacet\n";
+    }
+    stl += "endsolid block\n";
+    dir.write("block.stl", stl);
+    let case = dir.write(
+        "block.json",
+        r#"{"tool": {"diameter": 6}, "stock_box": [-30, -30, 0, 30, 30, 10], "part_stl": "block.stl", "stepdown": 2.5}"#,
+    );
+    let mut bad = Vec::new();
+    for strategy in ["adaptive", "offset"] {
+        bad.extend(check_case(&rs274, &case, strategy, "linuxcnc", &["--res", "0.1"]));
+    }
+    assert!(bad.is_empty(), "{} problem(s):\n{}", bad.len(), bad.join("\n"));
+}

@@ -33,6 +33,7 @@
 pub mod error;
 pub mod geom;
 pub mod io;
+pub mod mesh;
 pub mod model;
 pub mod pipeline;
 pub mod plan;
@@ -42,6 +43,7 @@ pub mod report;
 pub mod sim;
 pub mod strategy;
 pub mod toolpath;
+pub mod zlevel;
 
 pub use error::{Error, Result};
 pub use swarf_import;

@@ -93,36 +93,9 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
     validate_params(&opts.params)?;
     let t0 = Instant::now();
     progress(Stage::Plan, 0.0);
-    let debug = std::env::var("SWARF_DEBUG").is_ok();
-    let regions = job.regions(job.radius(), strategy::wall_margin(&opts.params))?;
-    if debug {
-        eprintln!("regions {:.3} s", t0.elapsed().as_secs_f64());
-    }
-    let geom = LayerGeom::new(job, &regions, &opts.params)?;
-    if debug {
-        eprintln!("layer geometry {:.3} s", t0.elapsed().as_secs_f64());
-    }
-    let passes = strategy::passes(job, &geom, &opts.params)?;
-    if debug {
-        eprintln!("passes {:.3} s ({} passes)", t0.elapsed().as_secs_f64(), passes.len());
-    }
-    if passes.is_empty() && opts.params.strategy != strategy::StrategyKind::Adaptive {
-        return Err(Error::param("strategy", "the strategy found nothing to cut"));
-    }
-    let zs = job.levels();
-    let levels: Vec<(f64, Vec<strategy::Pass>)> = zs.iter().map(|z| (*z, passes.clone())).collect();
-    let finish: Vec<(f64, Vec<strategy::Pass>)> = if opts.params.finish {
-        let fp = strategy::finish_passes(job, &regions, &opts.params);
-        zs.iter().map(|z| (*z, fp.clone())).collect()
-    } else {
-        Vec::new()
-    };
+    let Planned { mut toolpath, levels: zs, regions } =
+        plan(job, opts)?.ok_or_else(|| Error::param("strategy", "the strategy found nothing to cut"))?;
     progress(Stage::Plan, 0.5);
-    let mut toolpath = if opts.params.strategy == strategy::StrategyKind::Adaptive {
-        plan::adaptive::link_adaptive(job, &regions, &geom, &opts.params, &zs, &finish, &opts.sim)?
-    } else {
-        plan::link(job, &regions, &opts.params, &levels, &finish, &opts.sim)?
-    };
     toolpath.quantize(post::COORD_STEP, post::CENTER_STEP);
     let compute_s = t0.elapsed().as_secs_f64();
     progress(Stage::Plan, 1.0);
@@ -176,6 +149,53 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
         rep.plunges = t.plunges;
     }
     Ok(RoughResult { toolpath, gcode, report: rep, replay })
+}
+
+/// A planned 2.5D program.
+#[derive(Debug, Clone)]
+pub struct Planned {
+    /// The program.
+    pub toolpath: Toolpath,
+    /// Its levels, top down.
+    pub levels: Vec<f64>,
+    /// The regions of the job it was planned on.
+    pub regions: crate::model::Regions,
+}
+
+/// Plans the program of a 2.5D job (no posting, no simulation), or `None` when a strategy that
+/// works from passes finds none.
+pub fn plan(job: &Job, opts: &RoughOptions) -> Result<Option<Planned>> {
+    let t0 = Instant::now();
+    let debug = std::env::var("SWARF_DEBUG").is_ok();
+    let regions = job.regions(job.radius(), strategy::wall_margin(&opts.params))?;
+    if debug {
+        eprintln!("regions {:.3} s", t0.elapsed().as_secs_f64());
+    }
+    let geom = LayerGeom::new(job, &regions, &opts.params)?;
+    if debug {
+        eprintln!("layer geometry {:.3} s", t0.elapsed().as_secs_f64());
+    }
+    let passes = strategy::passes(job, &geom, &opts.params)?;
+    if debug {
+        eprintln!("passes {:.3} s ({} passes)", t0.elapsed().as_secs_f64(), passes.len());
+    }
+    if passes.is_empty() && opts.params.strategy != strategy::StrategyKind::Adaptive {
+        return Ok(None);
+    }
+    let zs = job.levels();
+    let levels: Vec<(f64, Vec<strategy::Pass>)> = zs.iter().map(|z| (*z, passes.clone())).collect();
+    let finish: Vec<(f64, Vec<strategy::Pass>)> = if opts.params.finish {
+        let fp = strategy::finish_passes(job, &regions, &opts.params);
+        zs.iter().map(|z| (*z, fp.clone())).collect()
+    } else {
+        Vec::new()
+    };
+    let toolpath = if opts.params.strategy == strategy::StrategyKind::Adaptive {
+        plan::adaptive::link_adaptive(job, &regions, &geom, &opts.params, &zs, &finish, &opts.sim)?
+    } else {
+        plan::link(job, &regions, &opts.params, &levels, &finish, &opts.sim)?
+    };
+    Ok(Some(Planned { toolpath, levels: zs, regions }))
 }
 
 /// The built-in example job (a pocket with two islands).

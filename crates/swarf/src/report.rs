@@ -136,6 +136,9 @@ pub struct Report {
     pub rest_fraction: f64,
     /// Reachable material left, mm³.
     pub rest_volume_mm3: f64,
+    /// Thickest rest material, mm (2.5D: its height above the floor; 3D: above the lowest the
+    /// tool reaches there).
+    pub rest_max_thickness_mm: f64,
     /// Area the tool can reach, mm².
     pub reachable_area_mm2: f64,
     /// Volume removed, mm³.
@@ -187,6 +190,7 @@ pub fn fill(rep: &mut Report, tp: &Toolpath, replay: &Replay, rest: &Rest, rapid
     rep.rapid_collisions = replay.rapid_collisions.len();
     rep.rest_area_mm2 = rest.area_mm2;
     rep.rest_volume_mm3 = rest.volume_mm3;
+    rep.rest_max_thickness_mm = rest.max_thickness_mm;
     rep.reachable_area_mm2 = rest.reachable_mm2;
     rep.rest_fraction = if rest.reachable_mm2 > 0.0 { rest.area_mm2 / rest.reachable_mm2 } else { 0.0 };
     rep.removed_volume_mm3 = replay.removed_volume;

@@ -8,7 +8,9 @@
 use crate::error::{Error, Result};
 use crate::geom::area::Fill;
 use crate::geom::{Area, DVec2};
+use crate::io::stl::{Mesh, Placement};
 use crate::model::{Job, Tool, Width};
+use crate::zlevel::MeshJob;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -111,8 +113,35 @@ pub fn read_case(path: &Path) -> Result<Job> {
     parse_case(path, &text)
 }
 
-/// Parses case JSON; `path` names the file in messages.
+/// Parses a 2.5D case; `path` names the file in messages. A 3D case (`stock_box`,
+/// `part_stl`) is refused: read it with [`parse_input`].
 pub fn parse_case(path: &Path, bytes: &[u8]) -> Result<Job> {
+    match parse_input(path, bytes)? {
+        Input::Flat(job) => Ok(job),
+        Input::Mesh(_) => {
+            Err(Error::input(path, "stock_box", "a 3D case (stock_box / part_stl): this reader takes 2.5D cases only"))
+        }
+    }
+}
+
+/// What a case describes: a 2.5D job (polygons) or a 3D one (a mesh in a stock box).
+#[derive(Debug, Clone)]
+pub enum Input {
+    /// Stock and part outlines.
+    Flat(Job),
+    /// A mesh part in a stock box.
+    Mesh(Box<MeshJob>),
+}
+
+/// Reads a case file of either kind.
+pub fn read_input(path: &Path) -> Result<Input> {
+    let text = std::fs::read(path).map_err(|e| Error::input(path, "file", format!("cannot read: {e}")))?;
+    parse_input(path, &text)
+}
+
+/// Parses case JSON of either kind; `path` names the file in messages and locates the STL of a
+/// 3D case.
+pub fn parse_input(path: &Path, bytes: &[u8]) -> Result<Input> {
     let file = path.to_path_buf();
     if bytes.iter().all(u8::is_ascii_whitespace) {
         return Err(Error::input(&file, "file", "the file is empty"));
@@ -135,10 +164,7 @@ pub fn parse_case(path: &Path, bytes: &[u8]) -> Result<Job> {
     };
     let cx = Ctx { file: file.clone(), scale };
     if root.get("stock_box").is_some() || root.get("part_stl").is_some() {
-        return Err(cx.err(
-            "stock_box",
-            "3D cases (stock_box / part_stl) are not supported by this version; give a 2.5D case with \"stock\" and \"part\" polygons",
-        ));
+        return mesh_case(&cx, &root, path).map(|j| Input::Mesh(Box::new(j)));
     }
     let stock_v = root.get("stock").ok_or_else(|| cx.err("stock", "missing: the raw stock outline [[x, y], …]"))?;
     let stock = if stock_v.as_array().is_some_and(|a| {
@@ -156,43 +182,11 @@ pub fn parse_case(path: &Path, bytes: &[u8]) -> Result<Job> {
         None | Some(Value::Null) => Area::empty(),
         Some(v) => cx.polygons(v, "fixtures")?,
     };
-    let tool = root.get("tool").ok_or_else(|| cx.err("tool", "missing: {\"diameter\": mm, \"type\": \"flat\"}"))?;
-    if let Some(t) = tool.get("type").and_then(Value::as_str)
-        && t != "flat"
-    {
-        return Err(cx.err("tool.type", format!("{t:?}: only flat end mills are supported")));
-    }
-    let diameter =
-        cx.num(tool.get("diameter").ok_or_else(|| cx.err("tool.diameter", "missing"))?, "tool.diameter")? * scale;
+    let c = common(&cx, &root)?;
+    let Common { diameter, allowance, allowance_floor, width, stepdown, feed, rapid_rate, spindle_rpm } = c;
     let stock_top = cx.opt_num(&root, "stock_top")?.unwrap_or(0.0) * scale;
     let part_top = cx.opt_num(&root, "part_top")?.map_or(stock_top, |v| v * scale);
     let floor = cx.opt_num(&root, "floor")?.ok_or_else(|| cx.err("floor", "missing: the depth to clear to"))? * scale;
-    let allowance = cx.opt_num(&root, "allowance")?.unwrap_or(0.0) * scale;
-    let allowance_floor = cx.opt_num(&root, "allowance_floor")?.map_or(allowance, |v| v * scale);
-    let width = match (cx.opt_num(&root, "engagement_deg")?, cx.opt_num(&root, "stepover")?) {
-        (Some(t), _) => Width::EngagementDeg(t),
-        (None, Some(s)) => Width::Stepover(s),
-        (None, None) => Width::Stepover(0.4),
-    };
-    let which = if matches!(width, Width::EngagementDeg(_)) { "engagement_deg" } else { "stepover" };
-    width.validate(which).map_err(|e| match e {
-        Error::Param { place, reason } => cx.err(place, reason),
-        other => other,
-    })?;
-    let stepdown = cx.opt_num(&root, "stepdown")?.map(|v| v * scale);
-    let feed = cx.opt_num(&root, "feed_default")?.unwrap_or(1000.0) * scale;
-    let rapid_rate = cx.opt_num(&root, "rapid_rate")?.unwrap_or(5000.0) * scale;
-    let spindle_rpm = cx.opt_num(&root, "spindle_rpm")?.unwrap_or(10000.0);
-    for (key, v) in [("spindle_rpm", spindle_rpm), ("feed_default", feed), ("rapid_rate", rapid_rate)] {
-        if v.is_nan() || v <= 0.0 {
-            return Err(cx.err(key, format!("{v}: must be a positive number")));
-        }
-    }
-    if let Some(sd) = stepdown
-        && (sd.is_nan() || sd <= 0.0)
-    {
-        return Err(cx.err("stepdown", format!("{sd} mm: the step-down must be positive")));
-    }
     if stock.is_empty() {
         return Err(cx.err("stock", "the stock outline has no area"));
     }
@@ -201,7 +195,7 @@ pub fn parse_case(path: &Path, bytes: &[u8]) -> Result<Job> {
     if let Some(n) = tool_number(tool_num_value(&root)) {
         tool.number = n;
     }
-    Ok(Job {
+    Ok(Input::Flat(Job {
         name,
         stock,
         stock_top,
@@ -217,6 +211,138 @@ pub fn parse_case(path: &Path, bytes: &[u8]) -> Result<Job> {
         feed,
         rapid_rate,
         spindle_rpm,
+    }))
+}
+
+/// What 2.5D and 3D cases share: the tool, width of cut, allowances, step-down and rates.
+struct Common {
+    diameter: f64,
+    allowance: f64,
+    allowance_floor: f64,
+    width: Width,
+    stepdown: Option<f64>,
+    feed: f64,
+    rapid_rate: f64,
+    spindle_rpm: f64,
+}
+
+fn common(cx: &Ctx, root: &Value) -> Result<Common> {
+    let scale = cx.scale;
+    let tool = root.get("tool").ok_or_else(|| cx.err("tool", "missing: {\"diameter\": mm, \"type\": \"flat\"}"))?;
+    if let Some(t) = tool.get("type").and_then(Value::as_str)
+        && t != "flat"
+    {
+        return Err(cx.err("tool.type", format!("{t:?}: only flat end mills are supported")));
+    }
+    let diameter =
+        cx.num(tool.get("diameter").ok_or_else(|| cx.err("tool.diameter", "missing"))?, "tool.diameter")? * scale;
+    let allowance = cx.opt_num(root, "allowance")?.unwrap_or(0.0) * scale;
+    let allowance_floor = cx.opt_num(root, "allowance_floor")?.map_or(allowance, |v| v * scale);
+    let width = match (cx.opt_num(root, "engagement_deg")?, cx.opt_num(root, "stepover")?) {
+        (Some(t), _) => Width::EngagementDeg(t),
+        (None, Some(s)) => Width::Stepover(s),
+        (None, None) => Width::Stepover(0.4),
+    };
+    let which = if matches!(width, Width::EngagementDeg(_)) { "engagement_deg" } else { "stepover" };
+    width.validate(which).map_err(|e| match e {
+        Error::Param { place, reason } => cx.err(place, reason),
+        other => other,
+    })?;
+    let stepdown = cx.opt_num(root, "stepdown")?.map(|v| v * scale);
+    let feed = cx.opt_num(root, "feed_default")?.unwrap_or(1000.0) * scale;
+    let rapid_rate = cx.opt_num(root, "rapid_rate")?.unwrap_or(5000.0) * scale;
+    let spindle_rpm = cx.opt_num(root, "spindle_rpm")?.unwrap_or(10000.0);
+    for (key, v) in [("spindle_rpm", spindle_rpm), ("feed_default", feed), ("rapid_rate", rapid_rate)] {
+        if v.is_nan() || v <= 0.0 {
+            return Err(cx.err(key, format!("{v}: must be a positive number")));
+        }
+    }
+    if let Some(sd) = stepdown
+        && (sd.is_nan() || sd <= 0.0)
+    {
+        return Err(cx.err("stepdown", format!("{sd} mm: the step-down must be positive")));
+    }
+    Ok(Common { diameter, allowance, allowance_floor, width, stepdown, feed, rapid_rate, spindle_rpm })
+}
+
+/// A 3D case: `stock_box` [xmin, ymin, zmin, xmax, ymax, zmax], `part_stl` (relative to the
+/// case file), `part_transform` {`scale`, `rotate_x_deg`, `rotate_y_deg`, `rotate_z_deg`,
+/// `translate`} (in that order), `floor` (default: the stock bottom).
+fn mesh_case(cx: &Ctx, root: &Value, path: &Path) -> Result<MeshJob> {
+    let scale = cx.scale;
+    let c = common(cx, root)?;
+    let bx =
+        root.get("stock_box").ok_or_else(|| cx.err("stock_box", "missing: [xmin, ymin, zmin, xmax, ymax, zmax]"))?;
+    let b = bx.as_array().filter(|a| a.len() == 6).ok_or_else(|| {
+        cx.err("stock_box", format!("expected [xmin, ymin, zmin, xmax, ymax, zmax], found {}", short(bx)))
+    })?;
+    let mut v = [0.0; 6];
+    for (i, x) in v.iter_mut().enumerate() {
+        *x = cx.num(&b[i], &format!("stock_box[{i}]"))? * scale;
+    }
+    let (lo, hi) = (crate::geom::DVec3::new(v[0], v[1], v[2]), crate::geom::DVec3::new(v[3], v[4], v[5]));
+    if !(hi.x > lo.x && hi.y > lo.y && hi.z > lo.z) {
+        return Err(cx.err("stock_box", "each maximum must be greater than its minimum"));
+    }
+    let stl = root
+        .get("part_stl")
+        .ok_or_else(|| cx.err("part_stl", "missing: the part's STL file, relative to this case"))?;
+    let stl = stl.as_str().ok_or_else(|| cx.err("part_stl", format!("expected a file name, found {}", short(stl))))?;
+    let stl_path = path.parent().unwrap_or(Path::new("")).join(stl);
+    let mut mesh = Mesh::read(&stl_path)?;
+    let mut place = Placement::default();
+    if let Some(t) = root.get("part_transform").filter(|t| !t.is_null()) {
+        if !t.is_object() {
+            return Err(
+                cx.err("part_transform", format!("expected {{\"scale\": …, \"rotate_x_deg\": …}}, found {}", short(t)))
+            );
+        }
+        if let Some(s) = cx.opt_num(t, "scale")? {
+            if s == 0.0 {
+                return Err(cx.err("part_transform.scale", "must not be zero"));
+            }
+            place.scale = s;
+        }
+        for (i, k) in ["rotate_x_deg", "rotate_y_deg", "rotate_z_deg"].iter().enumerate() {
+            if let Some(a) = cx.opt_num(t, k)? {
+                place.rotate_deg[i] = a;
+            }
+        }
+        if let Some(tr) = t.get("translate").filter(|v| !v.is_null()) {
+            let a = tr.as_array().filter(|a| a.len() == 3).ok_or_else(|| {
+                cx.err("part_transform.translate", format!("expected [x, y, z], found {}", short(tr)))
+            })?;
+            let mut d = [0.0; 3];
+            for (i, x) in d.iter_mut().enumerate() {
+                *x = cx.num(&a[i], &format!("part_transform.translate[{i}]"))?;
+            }
+            place.translate = crate::geom::DVec3::from_array(d);
+        }
+    }
+    mesh.transform(&place);
+    let floor = cx.opt_num(root, "floor")?.map_or(lo.z, |f| f * scale);
+    if floor >= hi.z {
+        return Err(cx.err("floor", format!("{floor} mm: must be below the stock top {}", hi.z)));
+    }
+    let mut tool = Tool::flat(c.diameter);
+    if let Some(n) = tool_number(tool_num_value(root)) {
+        tool.number = n;
+    }
+    let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("job").to_string();
+    Ok(MeshJob {
+        name,
+        mesh,
+        stock_lo: lo,
+        stock_hi: hi,
+        floor: floor.max(lo.z),
+        allowance: c.allowance,
+        allowance_floor: c.allowance_floor,
+        width: c.width,
+        stepdown: c.stepdown.unwrap_or(c.diameter / 2.0),
+        tool,
+        feed: c.feed,
+        rapid_rate: c.rapid_rate,
+        spindle_rpm: c.spindle_rpm,
     })
 }
 

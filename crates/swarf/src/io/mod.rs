@@ -10,7 +10,7 @@ use crate::model::Job;
 use std::path::Path;
 
 /// What the user may set on top of (or instead of) what the input file says.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct Overrides {
     /// Tool diameter, mm.
     pub tool_diameter: Option<f64>,
@@ -28,9 +28,13 @@ pub struct Overrides {
     pub allowance: Option<f64>,
     /// Drawing import options.
     pub import: swarf_import::ImportOptions,
+    /// Placement of an STL part read on its own (its units' scale comes from `import.units`).
+    pub placement: stl::Placement,
+    /// Stock round an STL part read on its own: its bounds grown by this sideways and on top, mm.
+    pub stock_margin: f64,
 }
 
-/// Reads a case (`.json`), DXF or SVG file into a job, applies the overrides and validates it.
+/// Reads a 2.5D case (`.json`), DXF or SVG file into a job, applies the overrides and validates it.
 pub fn load_job(path: &Path, ov: &Overrides) -> Result<Job> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let mut job = match ext.as_str() {
@@ -49,6 +53,125 @@ pub fn load_job(path: &Path, ov: &Overrides) -> Result<Job> {
     apply(&mut job, ov);
     job.validate()?;
     Ok(job)
+}
+
+/// Reads a case (`.json`, 2.5D or 3D), an STL part, a DXF or an SVG file, applies the
+/// overrides and validates the job.
+///
+/// An STL part alone gets a stock box round it (its bounds grown by `stock_margin` sideways and
+/// on top, its bottom at the part's lowest point), is placed by `placement` (after the units'
+/// scale), and is roughed to its lowest point with a step-down of half the tool diameter unless
+/// the overrides say otherwise.
+pub fn load_input(path: &Path, ov: &Overrides) -> Result<case::Input> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let is_stl = ext == "stl" || (ext != "json" && ext != "dxf" && ext != "svg" && sniff_stl(path));
+    if is_stl {
+        let mut mesh = stl::Mesh::read(path)?;
+        let mut place = ov.placement;
+        place.scale *= ov.import.units.map_or(1.0, |u| u.mm());
+        mesh.transform(&place);
+        let (lo, hi) = mesh.bounds().ok_or_else(|| Error::input(path, "file", "the mesh is empty"))?;
+        let m = ov.stock_margin;
+        let d = ov.tool_diameter.unwrap_or(6.0);
+        let mut job = crate::zlevel::MeshJob {
+            name: path.file_stem().and_then(|s| s.to_str()).unwrap_or("part").to_string(),
+            mesh,
+            stock_lo: crate::geom::DVec3::new(lo.x - m, lo.y - m, lo.z),
+            stock_hi: crate::geom::DVec3::new(hi.x + m, hi.y + m, hi.z + m),
+            floor: lo.z,
+            allowance: 0.0,
+            allowance_floor: 0.0,
+            tool: crate::model::Tool::flat(d),
+            width: crate::model::Width::Stepover(0.4),
+            stepdown: d / 2.0,
+            feed: 1000.0,
+            rapid_rate: 5000.0,
+            spindle_rpm: 10000.0,
+        };
+        apply_mesh(&mut job, ov);
+        job.validate()?;
+        return Ok(case::Input::Mesh(Box::new(job)));
+    }
+    if ext == "json" || (ext != "dxf" && ext != "svg" && sniff_json(path)) {
+        return match case::read_input(path)? {
+            case::Input::Flat(mut job) => {
+                apply(&mut job, ov);
+                job.validate()?;
+                Ok(case::Input::Flat(job))
+            }
+            case::Input::Mesh(mut job) => {
+                apply_mesh(&mut job, ov);
+                job.validate()?;
+                Ok(case::Input::Mesh(job))
+            }
+        };
+    }
+    load_job(path, ov).map(case::Input::Flat)
+}
+
+fn head(path: &Path) -> Vec<u8> {
+    use std::io::Read;
+    let mut buf = vec![0u8; 512];
+    let n = std::fs::File::open(path).and_then(|mut f| f.read(&mut buf)).unwrap_or(0);
+    buf.truncate(n);
+    buf
+}
+
+fn sniff_json(path: &Path) -> bool {
+    head(path).iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'{')
+}
+
+fn sniff_stl(path: &Path) -> bool {
+    let h = head(path);
+    let t = String::from_utf8_lossy(&h);
+    let t = t.trim_start();
+    (t.len() >= 5 && t[..5].eq_ignore_ascii_case("solid") && !t.contains("<svg") && !t.contains("SECTION"))
+        || (h.len() >= 84
+            && !h[..80].contains(&b'<')
+            && std::fs::metadata(path).is_ok_and(|m| {
+                let n = u32::from_le_bytes([h[80], h[81], h[82], h[83]]) as u64;
+                m.len() == 84 + 50 * n
+            }))
+}
+
+impl Default for Overrides {
+    fn default() -> Self {
+        Overrides {
+            tool_diameter: None,
+            width: None,
+            stepdown: None,
+            depth: None,
+            feed: None,
+            spindle_rpm: None,
+            allowance: None,
+            import: Default::default(),
+            placement: Default::default(),
+            stock_margin: 2.0,
+        }
+    }
+}
+
+/// Applies overrides to a mesh job.
+pub fn apply_mesh(job: &mut crate::zlevel::MeshJob, ov: &Overrides) {
+    if let Some(d) = ov.tool_diameter {
+        job.tool.diameter = d;
+    }
+    if let Some(w) = ov.width {
+        job.width = w;
+    }
+    if let Some(s) = ov.stepdown {
+        job.stepdown = s;
+    }
+    if let Some(f) = ov.feed {
+        job.feed = f;
+    }
+    if let Some(s) = ov.spindle_rpm {
+        job.spindle_rpm = s;
+    }
+    if let Some(a) = ov.allowance {
+        job.allowance = a;
+        job.allowance_floor = a;
+    }
 }
 
 /// Applies overrides to a job.

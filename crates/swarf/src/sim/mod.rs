@@ -24,6 +24,8 @@ pub mod sweep;
 
 pub use raster::{RasterSim, Replay, Sample, SampleKind};
 
+use crate::geom;
+
 /// Simulation settings.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SimOptions {
@@ -40,11 +42,44 @@ pub struct SimOptions {
     pub sample_step: Option<f64>,
     /// Refuse grids larger than this many cells.
     pub max_cells: usize,
+    /// Heights that override the job's flat stock top and part walls where they say more: the
+    /// state a 3D job's earlier levels and tools left, and the part's surface (see
+    /// [`HeightMap`]).
+    pub heights: Option<std::sync::Arc<HeightMap>>,
 }
 
 impl Default for SimOptions {
     fn default() -> Self {
-        Self { res: None, tol: 0.01, eps: 0.01, ring_delta: 1e-4, sample_step: None, max_cells: 60_000_000 }
+        Self {
+            res: None,
+            tol: 0.01,
+            eps: 0.01,
+            ring_delta: 1e-4,
+            sample_step: None,
+            max_cells: 60_000_000,
+            heights: None,
+        }
+    }
+}
+
+/// Stock and part heights on a grid, for the models of a 3D job (z-level roughing of a mesh):
+/// a model built with them in [`SimOptions::heights`] lowers its stock to `stock` and raises its
+/// part to `part` at every cell whose centre falls in a cell of `grid` (cells of both grids
+/// aligned to the same origin and size coincide).
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeightMap {
+    /// The grid of the heights.
+    pub grid: grid::Grid,
+    /// Top of the stock per cell (−∞: no stock).
+    pub stock: Vec<f32>,
+    /// Top of what must stay per cell (−∞: nothing), or none.
+    pub part: Option<Vec<f32>>,
+}
+
+impl HeightMap {
+    /// The index of the cell of `grid` holding `q`.
+    pub fn cell(&self, q: geom::DVec2) -> Option<usize> {
+        self.grid.cell_of(q).map(|(i, j)| j * self.grid.nx + i)
     }
 }
 

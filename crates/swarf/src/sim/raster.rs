@@ -308,26 +308,8 @@ impl RasterSim {
     /// Builds the model of `job` for its tool.
     pub fn new(job: &Job, regions: &Regions, opts: &SimOptions) -> Result<Self> {
         let r = job.radius();
-        let res = opts.res_for(job.tool.diameter);
-        if !(res.is_finite() && res > 0.0) {
-            return Err(Error::param("--res", "the simulation cell size must be positive"));
-        }
-        let (slo, shi) = job.stock.bounds().ok_or_else(|| Error::param("stock", "empty"))?;
-        let (mut lo, mut hi) = (slo, shi);
-        if let Some((a, b)) = regions.keep.bounds() {
-            // the part can be a large frame: only the part near the stock matters
-            let m = DVec2::splat(4.0 * r + 5.0);
-            lo = lo.min(a.max(slo - m));
-            hi = hi.max(b.min(shi + m));
-        }
-        let pad = r + 4.0 * res + 1.0;
-        let grid = Grid::covering(lo, hi, pad, res, slo);
-        if grid.len() > opts.max_cells {
-            return Err(Error::param(
-                "--res",
-                format!("a {}×{} grid at {res} mm is too large; use a coarser --res", grid.nx, grid.ny),
-            ));
-        }
+        let grid = Self::grid_for(job, &regions.keep, opts)?;
+        let res = grid.res;
         let stock_mask = grid.rasterize(&job.stock);
         let part_mask = grid.rasterize(&job.part);
         let fix_mask = grid.rasterize(&job.fixtures);
@@ -353,6 +335,18 @@ impl RasterSim {
                 }
             },
         );
+        if let Some(hm) = &opts.heights {
+            s0.par_chunks_mut(grid.nx).zip(p.par_chunks_mut(grid.nx)).enumerate().for_each(|(j, (s0, p))| {
+                for i in 0..grid.nx {
+                    if let Some(k) = hm.cell(grid.center(i, j)) {
+                        s0[i] = s0[i].min(hm.stock[k]);
+                        if let Some(hp) = &hm.part {
+                            p[i] = p[i].max(hp[k]);
+                        }
+                    }
+                }
+            });
+        }
         // the circumference of the discretised tool (paper 1 §4.2, eq. 5: D_D = D·p): as many
         // points as the tool image has circumference pixels, on a circle half a pixel outside
         // the tool so that they sit in the first pixels the tool has not swept
@@ -407,6 +401,33 @@ impl RasterSim {
             nbx: 0,
         }
         .with_blocks())
+    }
+
+    /// The grid a model of `job` (with `keep` to stay clear of) is built on: the stock and the
+    /// part near it, padded by a tool radius and a few cells, aligned to the stock's corner.
+    pub fn grid_for(job: &Job, keep: &Area, opts: &SimOptions) -> Result<Grid> {
+        let r = job.radius();
+        let res = opts.res_for(job.tool.diameter);
+        if !(res.is_finite() && res > 0.0) {
+            return Err(Error::param("--res", "the simulation cell size must be positive"));
+        }
+        let (slo, shi) = job.stock.bounds().ok_or_else(|| Error::param("stock", "empty"))?;
+        let (mut lo, mut hi) = (slo, shi);
+        if let Some((a, b)) = keep.bounds() {
+            // the part can be a large frame: only the part near the stock matters
+            let m = DVec2::splat(4.0 * r + 5.0);
+            lo = lo.min(a.max(slo - m));
+            hi = hi.max(b.min(shi + m));
+        }
+        let pad = r + 4.0 * res + 1.0;
+        let grid = Grid::covering(lo, hi, pad, res, slo);
+        if grid.len() > opts.max_cells {
+            return Err(Error::param(
+                "--res",
+                format!("a {}×{} grid at {res} mm is too large; use a coarser --res", grid.nx, grid.ny),
+            ));
+        }
+        Ok(grid)
     }
 
     /// Fills the block maxima.
@@ -1052,6 +1073,12 @@ impl RasterSim {
             }
         }
         r
+    }
+
+    /// Heights of what must stay (row-major): the part's top, or the floor where there is no
+    /// part.
+    pub fn part_heights(&self) -> &[f32] {
+        &self.p
     }
 
     /// Current stock heights (row-major, −∞ where there is no stock).

@@ -76,16 +76,21 @@ pub fn passes(g: &LayerGeom, params: &Params, existing: &[Pass]) -> Vec<Pass> {
 /// clean-up passes are clipped).
 pub fn passes_for_leftover(g: &LayerGeom, params: &Params, left: &Area, cell: f64) -> Vec<Pass> {
     let left = left.offset(-SLIVER, REGION_TOL).offset(SLIVER, REGION_TOL).intersection(left).without_slivers(0.01);
-    if left.is_empty() {
+    if left.is_empty() && !params.full_wall_contour {
         return Vec::new();
     }
     let left = left.simplified(cell);
-    let mut out = level_curves(g, params, &left.offset(cell, ZONE_TOL), g.step / 4.0);
+    let mut out =
+        if left.is_empty() { Vec::new() } else { level_curves(g, params, &left.offset(cell, ZONE_TOL), g.step / 4.0) };
     // the wall contour itself, last: what is left against the walls
     if !g.keep.is_empty() {
         // (the wall contour is the edge of the centres' region: clip by the leftover's reach
         // only, or the clipper may drop the contour as outside)
-        let zone = left.offset(g.r + 0.01 + cell, ZONE_TOL);
+        let zone = if params.full_wall_contour {
+            g.centres.offset(g.r + cell, ZONE_TOL)
+        } else {
+            left.offset(g.r + 0.01 + cell, ZONE_TOL)
+        };
         // with the corners where the walls close round the tool rounded off: a tool driven
         // into such a corner meets the material it can never clear on a quarter of its
         // circumference, a 90° engagement however little it removes; the fillet (0.15·R: at a
@@ -101,7 +106,11 @@ pub fn passes_for_leftover(g: &LayerGeom, params: &Params, left: &Area, cell: f6
             .flat_map(|r| away_turns(r).into_iter())
             .map(|phi| (1.0 / (0.5 * phi).cos().max(0.1) - 1.0) * phi * g.r * 0.5)
             .sum();
-        let rho = (CORNER_ROUND * g.r).min(REST_BUDGET * g.reachable.area() / per_rho.max(1e-12));
+        let rho = if params.corner_fillets {
+            (CORNER_ROUND * g.r).min(REST_BUDGET * g.reachable.area() / per_rho.max(1e-12))
+        } else {
+            0.0
+        };
         let rings = round_corners(&g.walls, rho);
         out.extend(super::offset::rings_passes(&rings, g.wall_level, &zone, params, true, PassKind::Cleanup));
     }

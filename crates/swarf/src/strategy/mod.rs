@@ -115,6 +115,15 @@ pub struct Params {
     /// feed boost; lifted rapids when long) instead of rapids at depth (G0): for controls
     /// whose G0 does not move in a straight line.
     pub feed_links: bool,
+    /// Adaptive clean-up: round the wall contour's inside corners (a fillet of at most 0.15 R
+    /// that holds the engagement there down and leaves a sliver of at most 0.3 % of the
+    /// reachable area). Off for z-level jobs, where the slivers of every level stack into a
+    /// wall corner a whole depth tall.
+    pub corner_fillets: bool,
+    /// Adaptive clean-up: contour every wall at every level, not only near the material the
+    /// passes left as the planner's raster sees it (a sliver thinner than a cell along a wall
+    /// escapes it; z-level jobs stack such slivers into walls a whole depth tall).
+    pub full_wall_contour: bool,
 }
 
 impl Default for Params {
@@ -137,6 +146,8 @@ impl Default for Params {
             overshoot_deg: 20.0,
             feed_boost: 1.0,
             feed_links: false,
+            corner_fillets: true,
+            full_wall_contour: false,
         }
     }
 }

@@ -1,0 +1,122 @@
+//! Z-level roughing of a mesh part, end to end: a 100 × 100 × 18 mm block with a centred
+//! 40 × 40 mm pocket 8 mm deep (written here as an ASCII STL), roughed from a stock box the
+//! size of the block. The pocket's volume is 12 800 mm³; a round tool leaves its four sharp
+//! corners, (R² − πR²/4) × 8 mm each.
+
+use std::path::{Path, PathBuf};
+use swarf::io::case::Input;
+use swarf::pipeline::RoughOptions;
+use swarf::strategy::{Params, StrategyKind};
+
+/// Facets of the block (counter-clockwise seen from outside).
+fn block_facets() -> Vec<[[f64; 3]; 3]> {
+    let mut f = Vec::new();
+    let mut quad = |a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]| {
+        f.push([a, b, c]);
+        f.push([a, c, d]);
+    };
+    let (h, fl) = (18.0, 10.0);
+    // top, round the opening
+    for (x0, y0, x1, y1) in
+        [(-50.0, -50.0, 50.0, -20.0), (-50.0, 20.0, 50.0, 50.0), (-50.0, -20.0, -20.0, 20.0), (20.0, -20.0, 50.0, 20.0)]
+    {
+        quad([x0, y0, h], [x1, y0, h], [x1, y1, h], [x0, y1, h]);
+    }
+    // pocket floor and walls (facing into the pocket)
+    quad([-20.0, -20.0, fl], [20.0, -20.0, fl], [20.0, 20.0, fl], [-20.0, 20.0, fl]);
+    quad([-20.0, -20.0, h], [-20.0, -20.0, fl], [20.0, -20.0, fl], [20.0, -20.0, h]);
+    quad([20.0, -20.0, h], [20.0, -20.0, fl], [20.0, 20.0, fl], [20.0, 20.0, h]);
+    quad([20.0, 20.0, h], [20.0, 20.0, fl], [-20.0, 20.0, fl], [-20.0, 20.0, h]);
+    quad([-20.0, 20.0, h], [-20.0, 20.0, fl], [-20.0, -20.0, fl], [-20.0, -20.0, h]);
+    // bottom and sides
+    quad([-50.0, -50.0, 0.0], [-50.0, 50.0, 0.0], [50.0, 50.0, 0.0], [50.0, -50.0, 0.0]);
+    quad([-50.0, -50.0, 0.0], [50.0, -50.0, 0.0], [50.0, -50.0, h], [-50.0, -50.0, h]);
+    quad([50.0, -50.0, 0.0], [50.0, 50.0, 0.0], [50.0, 50.0, h], [50.0, -50.0, h]);
+    quad([50.0, 50.0, 0.0], [-50.0, 50.0, 0.0], [-50.0, 50.0, h], [50.0, 50.0, h]);
+    quad([-50.0, 50.0, 0.0], [-50.0, -50.0, 0.0], [-50.0, -50.0, h], [-50.0, 50.0, h]);
+    f
+}
+
+fn write_case(dir: &Path) -> PathBuf {
+    let mut stl = String::from("solid block\n");
+    for t in block_facets() {
+        stl += "facet normal 0 0 0\nouter loop\n";
+        for v in t {
+            stl += &format!("vertex {} {} {}\n", v[0], v[1], v[2]);
+        }
+        stl += "endloop\nendfacet\n";
+    }
+    stl += "endsolid block\n";
+    std::fs::write(dir.join("block.stl"), stl).unwrap();
+    let case = r#"{"units": "mm", "tool": {"diameter": 6, "type": "flat"},
+        "stock_box": [-50, -50, 0, 50, 50, 18], "part_stl": "block.stl",
+        "stepdown": 2.0, "stepover": 0.4, "feed_default": 1000, "rapid_rate": 5000}"#;
+    let p = dir.join("block.json");
+    std::fs::write(&p, case).unwrap();
+    p
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("swarf-zlevel-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn rough(strategy: StrategyKind) -> swarf::pipeline::RoughResult {
+    let dir = tmpdir(strategy.name());
+    let case = write_case(&dir);
+    let Input::Mesh(job) = swarf::io::load_input(&case, &Default::default()).unwrap_or_else(|e| panic!("{e}")) else {
+        panic!("a 3D case reads as a mesh job")
+    };
+    let opts = RoughOptions {
+        params: Params { strategy, ..Default::default() },
+        sim: swarf::sim::SimOptions { res: Some(0.1), ..Default::default() },
+        ..Default::default()
+    };
+    let res = swarf::zlevel::rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{e}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    res
+}
+
+fn check(strategy: StrategyKind) {
+    let res = rough(strategy);
+    let r = &res.report;
+    assert_eq!(r.levels, vec![16.0, 14.0, 12.0, 10.0], "levels");
+    assert_eq!((r.gouges, r.rapid_collisions, r.plunges), (0, 0, 0), "{}", strategy.name());
+    // nothing the tool can reach is left thicker than the simulation's tolerance
+    assert!(r.rest_max_thickness_mm <= 0.05, "{}: rest {} mm thick", strategy.name(), r.rest_max_thickness_mm);
+    // the pocket less its four corners (res 0.1: within 0.5 %)
+    let corners = 4.0 * (9.0 - std::f64::consts::PI * 9.0 / 4.0) * 8.0;
+    let want = 12_800.0 - corners;
+    assert!(
+        (r.removed_volume_mm3 - want).abs() < 0.005 * want,
+        "{}: removed {} mm³, want {want}",
+        strategy.name(),
+        r.removed_volume_mm3
+    );
+    // every level but the first enters by a helix or ramp, and the program never goes below
+    // the pocket floor
+    assert!(res.toolpath.moves.iter().all(|m| m.to.z >= 10.0 - 1e-9));
+    assert!(r.entries >= 4, "{} entries", r.entries);
+}
+
+#[test]
+fn roughs_the_pocket_block_adaptive() {
+    check(StrategyKind::Adaptive);
+}
+
+#[test]
+fn roughs_the_pocket_block_offset() {
+    check(StrategyKind::Offset);
+}
+
+#[test]
+fn a_bad_stl_is_named() {
+    let dir = tmpdir("bad");
+    let case = write_case(&dir);
+    std::fs::write(dir.join("block.stl"), "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0 zero 0\n")
+        .unwrap();
+    let e = swarf::io::load_input(&case, &Default::default()).unwrap_err().to_string();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(e.contains("block.stl: line 5"), "{e}");
+}
