@@ -539,7 +539,8 @@ impl<'a, 'b> Engine<'a, 'b> {
         let need = self.r + self.margin + 0.005;
         let max = 6.0 * self.r;
         let min = self.r.max(1.0);
-        let clear = |b: DVec2| self.l.sim.keep_distance(&Path::Line { a: c.extend(0.0), b: b.extend(0.0) }, need + 1.0) >= need;
+        let clear =
+            |b: DVec2| self.l.sim.keep_distance(&Path::Line { a: c.extend(0.0), b: b.extend(0.0) }, need + 1.0) >= need;
         let mut best: Option<(f64, DVec2)> = None;
         for k in 0..24 {
             let a = std::f64::consts::TAU * k as f64 / 24.0;
