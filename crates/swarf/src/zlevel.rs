@@ -188,7 +188,7 @@ impl MeshJob {
 
 /// The material model of a whole mesh job: the stock box, with the part's surface from the
 /// mesh (raised by the floor allowance) as what must stay.
-fn model(job: &MeshJob, sim: &SimOptions, stock: Option<Vec<f32>>) -> Result<RasterSim> {
+fn model(job: &MeshJob, sim: &SimOptions) -> Result<RasterSim> {
     let mj = job.model_job();
     let regions = mj.regions(job.radius(), 0.0)?;
     let grid = RasterSim::grid_for(&mj, &regions.keep, sim)?;
@@ -197,7 +197,7 @@ fn model(job: &MeshJob, sim: &SimOptions, stock: Option<Vec<f32>>) -> Result<Ras
     for h in &mut part {
         *h += lift;
     }
-    let stock = stock.unwrap_or_else(|| vec![f32::INFINITY; grid.len()]);
+    let stock = vec![f32::INFINITY; grid.len()];
     let opts = SimOptions { heights: Some(Arc::new(HeightMap { grid, stock, part: Some(part) })), ..sim.clone() };
     RasterSim::new(&mj, &regions, &opts)
 }
@@ -222,7 +222,7 @@ pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -
     let t0 = Instant::now();
     let zs = job.levels();
     let mut shadows = crate::mesh::Shadows::new(&job.mesh);
-    let mut state = model(job, &opts.sim, None)?;
+    let mut state = model(job, &opts.sim)?;
     let safe_z = job.top() + opts.params.clearance;
     let mut out: Option<Toolpath> = None;
     let mut done = Vec::new();
@@ -265,9 +265,9 @@ pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -
         };
         let Some(p) = planned else { continue };
         let mut tp = p.toolpath;
+        // (each level's program ends with its retract to the safe height, where the next
+        // level's travel starts)
         tp.notes.retain(|n| !n.text.starts_with("level ") && !n.text.starts_with("end:"));
-        // (the level's program ends with its retract to the safe height: drop it, the next
-        // level's travel starts with one)
         if debug {
             eprintln!(
                 "z-level {} of {} at z {z:.3}: {} moves, {:.2} s",
@@ -366,7 +366,7 @@ pub fn rough(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(Stage,
     let mut replay = None;
     if opts.simulate {
         let t1 = Instant::now();
-        let mut sim = model(job, &opts.sim, None)?;
+        let mut sim = model(job, &opts.sim)?;
         let mut rp = sim.replay(&toolpath, &mut |f| progress(Stage::Simulate, f));
         let rest = rest(job, &sim);
         rp.res = sim.grid.res;
