@@ -42,6 +42,7 @@ pub mod post;
 pub mod report;
 pub mod sim;
 pub mod strategy;
+pub mod tooldb;
 pub mod toolpath;
 pub mod zlevel;
 
