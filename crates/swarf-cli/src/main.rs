@@ -419,7 +419,8 @@ impl Scene {
     }
 }
 
-fn write_outputs(scene: &Scene, res: &RoughResult, out: &Outputs) -> Result<(), Failure> {
+/// `scene` is drawn under the path, and only asked for when there is a picture to draw.
+fn write_outputs(scene: impl FnOnce() -> Scene, res: &RoughResult, out: &Outputs) -> Result<(), Failure> {
     // render everything first, then write: no output on failure
     let mut files: Vec<(PathBuf, Vec<u8>)> = vec![(out.gcode.clone(), res.gcode.clone().into_bytes())];
     if let Some(p) = &out.report {
@@ -457,6 +458,7 @@ fn write_outputs(scene: &Scene, res: &RoughResult, out: &Outputs) -> Result<(), 
         let Some(replay) = &res.replay else {
             return Err(swarf::Error::param("--plot", "the picture needs the simulation (drop --no-simulate)").into());
         };
+        let scene = scene();
         let fig = swarf::plot::Figure {
             title: format!(
                 "{} - {} - D{} - ref {:.0} deg - max {:.0} deg, p95 {:.0} deg - {:.2} min",
@@ -521,16 +523,18 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
             _ => (Some(p.with_extension("svg")), Some(p.with_extension("png"))),
         },
     };
-    let (res, scene) = match &input {
-        Input::Flat(job) => (run(job, &opts, a.opts.quiet)?, Scene::of(job)),
+    let res = match &input {
+        Input::Flat(job) => run(job, &opts, a.opts.quiet)?,
+        Input::Mesh(job) => with_bar(a.opts.quiet, |p| swarf::zlevel::rough(job, &opts, p))?,
+    };
+    let scene = || match &input {
+        Input::Flat(job) => Scene::of(job),
         Input::Mesh(job) => {
-            let res = with_bar(a.opts.quiet, |p| swarf::zlevel::rough(job, &opts, p))?;
-            let scene = Scene { part: job.outline(), stock: job.stock_area(), fixtures: swarf::geom::Area::empty() };
-            (res, scene)
+            Scene { part: job.outline(), stock: job.stock_area(), fixtures: swarf::geom::Area::empty() }
         }
     };
     write_outputs(
-        &scene,
+        scene,
         &res,
         &Outputs { gcode, report: a.report.clone(), samples: a.samples.clone(), plot_svg, plot_png },
     )?;
@@ -554,7 +558,7 @@ fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
         plot_svg: Some(dir.join("demo.svg")),
         plot_png: Some(dir.join("demo.png")),
     };
-    write_outputs(&Scene::of(&job), &res, &out)?;
+    write_outputs(|| Scene::of(&job), &res, &out)?;
     std::fs::write(dir.join("demo_pocket.json"), include_str!("../../swarf/examples_data/demo_pocket.json"))
         .with_context(|| format!("{}: cannot write", dir.display()))?;
     if !o.quiet {

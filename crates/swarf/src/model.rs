@@ -71,6 +71,18 @@ impl Width {
     }
 }
 
+/// Checks a tool's diameter and a width of cut (a 2.5D job's and a mesh job's alike).
+pub(crate) fn check_tool_and_width(tool: &Tool, width: Width) -> Result<()> {
+    let d = tool.diameter;
+    if !(d.is_finite() && d > 0.0) {
+        return Err(Error::param("tool diameter", format!("{d} mm: the tool diameter must be a positive number")));
+    }
+    width.validate(match width {
+        Width::Stepover(_) => "stepover",
+        Width::EngagementDeg(_) => "engagement",
+    })
+}
+
 /// One 2.5D job: what to cut, with what, how.
 #[derive(Debug, Clone)]
 pub struct Job {
@@ -166,14 +178,7 @@ impl Job {
 
     /// Checks every value a user can get wrong.
     pub fn validate(&self) -> Result<()> {
-        let d = self.tool.diameter;
-        if !(d.is_finite() && d > 0.0) {
-            return Err(Error::param("tool diameter", format!("{d} mm: the tool diameter must be a positive number")));
-        }
-        self.width.validate(match self.width {
-            Width::Stepover(_) => "stepover",
-            Width::EngagementDeg(_) => "engagement",
-        })?;
+        check_tool_and_width(&self.tool, self.width)?;
         if let Some(s) = self.stepdown
             && !(s.is_finite() && s > 0.0)
         {

@@ -99,19 +99,70 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
     toolpath.quantize(post::COORD_STEP, post::CENTER_STEP);
     let compute_s = t0.elapsed().as_secs_f64();
     progress(Stage::Plan, 1.0);
-    let mut header = Header { spindle_rpm: job.spindle_rpm, ..Default::default() };
+    let about = About {
+        name: &job.name,
+        what: "",
+        tool_diameter: job.tool.diameter,
+        width: job.width,
+        floor: job.floor,
+        feed: job.feed,
+        spindle_rpm: job.spindle_rpm,
+        rapid_rate: job.rapid_rate,
+    };
+    finish(toolpath, zs, &about, opts, compute_s, progress, |tp, progress| {
+        let mut sim = RasterSim::new(job, &regions, &opts.sim)?;
+        let mut rp = sim.replay(tp, &mut |f| progress(Stage::Simulate, f));
+        rp.rest_cells = sim.rest_cells();
+        rp.res = sim.grid.res;
+        Ok((rp, sim.rest()))
+    })
+}
+
+/// What the program's header and report say about the job.
+pub(crate) struct About<'a> {
+    /// The job's name (when the options name no input).
+    pub name: &'a str,
+    /// The kind of job, before the strategy in the header (`""` or `"z-level roughing, "`).
+    pub what: &'a str,
+    /// Tool diameter, mm.
+    pub tool_diameter: f64,
+    /// Width of cut.
+    pub width: crate::model::Width,
+    /// The job's floor, mm (the last level when there is none).
+    pub floor: f64,
+    /// Cutting feed, mm/min.
+    pub feed: f64,
+    /// Spindle speed, rpm.
+    pub spindle_rpm: f64,
+    /// Rapid rate for the time estimate, mm/min.
+    pub rapid_rate: f64,
+}
+
+/// Posts a planned program and fills its report: from `simulate` (the replay and the rest it
+/// finds) when the options ask for the simulation, from the program's totals otherwise.
+pub(crate) fn finish(
+    toolpath: Toolpath,
+    zs: Vec<f64>,
+    about: &About,
+    opts: &RoughOptions,
+    compute_s: f64,
+    progress: &mut dyn FnMut(Stage, f64),
+    simulate: impl FnOnce(&Toolpath, &mut dyn FnMut(Stage, f64)) -> Result<(Replay, crate::sim::raster::Rest)>,
+) -> Result<RoughResult> {
+    let mut header = Header { spindle_rpm: about.spindle_rpm, ..Default::default() };
     header.lines.push(format!(
-        "job {} - strategy {}",
-        if opts.input_name.is_empty() { &job.name } else { &opts.input_name },
+        "job {} - {}strategy {}",
+        if opts.input_name.is_empty() { about.name } else { &opts.input_name },
+        about.what,
         opts.params.strategy.name()
     ));
     header.lines.push(format!(
         "stepover {:.1} pct = {:.1} deg straight-cut engagement, {} levels to z {:.3}, feed {:.0} mm/min",
-        job.width.stepover() * 100.0,
-        job.width.engagement_deg(),
+        about.width.stepover() * 100.0,
+        about.width.engagement_deg(),
         zs.len(),
-        zs.last().copied().unwrap_or(job.floor),
-        job.feed
+        zs.last().copied().unwrap_or(about.floor),
+        about.feed
     ));
     header.lines.push(format!("milling {}", if opts.params.climb { "climb" } else { "conventional" }));
     let gcode = post::write(&toolpath, opts.post, &header);
@@ -120,28 +171,24 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
         input: opts.input_name.clone(),
         strategy: opts.params.strategy.name().to_string(),
         post: format!("{:?}", opts.post).to_lowercase(),
-        tool_diameter_mm: job.tool.diameter,
-        stepover: job.width.stepover(),
-        engagement_ref_deg: job.width.engagement_deg(),
-        levels: zs.clone(),
+        tool_diameter_mm: about.tool_diameter,
+        stepover: about.width.stepover(),
+        engagement_ref_deg: about.width.engagement_deg(),
+        levels: zs,
         compute_s,
         gcode_lines: gcode.lines().count(),
-        sim_res_mm: opts.sim.res_for(job.tool.diameter),
+        sim_res_mm: opts.sim.res_for(about.tool_diameter),
         ..Default::default()
     };
     let mut replay = None;
     if opts.simulate {
         let t1 = Instant::now();
-        let mut sim = RasterSim::new(job, &regions, &opts.sim)?;
-        let mut rp = sim.replay(&toolpath, &mut |f| progress(Stage::Simulate, f));
-        let rest = sim.rest();
-        rp.rest_cells = sim.rest_cells();
-        rp.res = sim.grid.res;
+        let (rp, rest) = simulate(&toolpath, progress)?;
         rep.simulate_s = t1.elapsed().as_secs_f64();
-        report::fill(&mut rep, &toolpath, &rp, &rest, job.rapid_rate);
+        report::fill(&mut rep, &toolpath, &rp, &rest, about.rapid_rate);
         replay = Some(rp);
     } else {
-        let t = toolpath.totals(job.rapid_rate);
+        let t = toolpath.totals(about.rapid_rate);
         rep.cut_length_mm = t.cut_length_mm;
         rep.rapid_length_mm = t.rapid_length_mm;
         rep.time_min = t.time_min;

@@ -23,8 +23,7 @@ use crate::geom::{Area, DVec3};
 use crate::io::stl::Mesh;
 use crate::model::{Job, REGION_TOL, Tool, Width};
 use crate::pipeline::{RoughOptions, RoughResult, Stage};
-use crate::post::{self, Header};
-use crate::report::{self, Report};
+use crate::post;
 use crate::sim::raster::RasterSim;
 use crate::sim::sweep::Path;
 use crate::sim::{HeightMap, SimOptions};
@@ -79,14 +78,7 @@ const LEVEL_MERGE: f64 = 0.02;
 impl MeshJob {
     /// Checks the numbers a user gives.
     pub fn validate(&self) -> Result<()> {
-        let d = self.tool.diameter;
-        if !(d.is_finite() && d > 0.0) {
-            return Err(Error::param("tool diameter", format!("{d} mm: must be a positive number")));
-        }
-        self.width.validate(match self.width {
-            Width::Stepover(_) => "stepover",
-            Width::EngagementDeg(_) => "engagement",
-        })?;
+        crate::model::check_tool_and_width(&self.tool, self.width)?;
         if !(self.stepdown.is_finite() && self.stepdown > 0.0) {
             return Err(Error::param("stepdown", format!("{} mm: must be positive", self.stepdown)));
         }
@@ -204,13 +196,8 @@ fn model(job: &MeshJob, sim: &SimOptions) -> Result<RasterSim> {
 
 /// Cuts every move of `tp` into `sim` (no measurements).
 fn cut_all(sim: &mut RasterSim, tp: &Toolpath) {
-    let r = sim.radius();
     for (from, m) in tp.segments() {
-        let path = Path::of(from, m);
-        let pieces = (path.xy_length() / (4.0 * r)).ceil().max(1.0) as usize;
-        for k in 0..pieces {
-            sim.cut(&path.sub(k as f64 / pieces as f64, (k + 1) as f64 / pieces as f64));
-        }
+        sim.cut_move(&Path::of(from, m));
     }
 }
 
@@ -333,55 +320,23 @@ pub fn rough(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(Stage,
     let (mut toolpath, zs) = plan(job, opts, &mut |f| progress(Stage::Plan, f))?;
     toolpath.quantize(post::COORD_STEP, post::CENTER_STEP);
     let compute_s = t0.elapsed().as_secs_f64();
-    let mut header = Header { spindle_rpm: job.spindle_rpm, ..Default::default() };
-    header.lines.push(format!(
-        "job {} - z-level roughing, strategy {}",
-        if opts.input_name.is_empty() { &job.name } else { &opts.input_name },
-        opts.params.strategy.name()
-    ));
-    header.lines.push(format!(
-        "stepover {:.1} pct = {:.1} deg straight-cut engagement, {} levels to z {:.3}, feed {:.0} mm/min",
-        job.width.stepover() * 100.0,
-        job.width.engagement_deg(),
-        zs.len(),
-        zs.last().copied().unwrap_or(job.floor),
-        job.feed
-    ));
-    header.lines.push(format!("milling {}", if opts.params.climb { "climb" } else { "conventional" }));
-    let gcode = post::write(&toolpath, opts.post, &header);
-    let mut rep = Report {
-        swarf_version: env!("CARGO_PKG_VERSION").to_string(),
-        input: opts.input_name.clone(),
-        strategy: opts.params.strategy.name().to_string(),
-        post: format!("{:?}", opts.post).to_lowercase(),
-        tool_diameter_mm: job.tool.diameter,
-        stepover: job.width.stepover(),
-        engagement_ref_deg: job.width.engagement_deg(),
-        levels: zs.clone(),
-        compute_s,
-        gcode_lines: gcode.lines().count(),
-        sim_res_mm: opts.sim.res_for(job.tool.diameter),
-        ..Default::default()
+    progress(Stage::Plan, 1.0);
+    let about = crate::pipeline::About {
+        name: &job.name,
+        what: "z-level roughing, ",
+        tool_diameter: job.tool.diameter,
+        width: job.width,
+        floor: job.floor,
+        feed: job.feed,
+        spindle_rpm: job.spindle_rpm,
+        rapid_rate: job.rapid_rate,
     };
-    let mut replay = None;
-    if opts.simulate {
-        let t1 = Instant::now();
+    crate::pipeline::finish(toolpath, zs, &about, opts, compute_s, progress, |tp, progress| {
         let mut sim = model(job, &opts.sim)?;
-        let mut rp = sim.replay(&toolpath, &mut |f| progress(Stage::Simulate, f));
-        let rest = rest(job, &sim);
+        let mut rp = sim.replay(tp, &mut |f| progress(Stage::Simulate, f));
         rp.res = sim.grid.res;
-        rep.simulate_s = t1.elapsed().as_secs_f64();
-        report::fill(&mut rep, &toolpath, &rp, &rest, job.rapid_rate);
-        replay = Some(rp);
-    } else {
-        let t = toolpath.totals(job.rapid_rate);
-        rep.cut_length_mm = t.cut_length_mm;
-        rep.rapid_length_mm = t.rapid_length_mm;
-        rep.time_min = t.time_min;
-        rep.entries = t.entries;
-        rep.plunges = t.plunges;
-    }
-    Ok(RoughResult { toolpath, gcode, report: rep, replay })
+        Ok((rp, rest(job, &sim)))
+    })
 }
 
 /// Material the tool could have removed and left: at each cell, the stock above the lowest

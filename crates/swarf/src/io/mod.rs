@@ -151,22 +151,33 @@ impl Default for Overrides {
     }
 }
 
-/// Applies overrides to a mesh job.
-pub fn apply_mesh(job: &mut crate::zlevel::MeshJob, ov: &Overrides) {
+/// Applies the overrides both kinds of job share: tool diameter, width of cut, feed, spindle.
+fn apply_cutting(
+    ov: &Overrides,
+    tool: &mut crate::model::Tool,
+    width: &mut crate::model::Width,
+    feed: &mut f64,
+    spindle_rpm: &mut f64,
+) {
     if let Some(d) = ov.tool_diameter {
-        job.tool.diameter = d;
+        tool.diameter = d;
     }
     if let Some(w) = ov.width {
-        job.width = w;
-    }
-    if let Some(s) = ov.stepdown {
-        job.stepdown = s;
+        *width = w;
     }
     if let Some(f) = ov.feed {
-        job.feed = f;
+        *feed = f;
     }
     if let Some(s) = ov.spindle_rpm {
-        job.spindle_rpm = s;
+        *spindle_rpm = s;
+    }
+}
+
+/// Applies overrides to a mesh job.
+pub fn apply_mesh(job: &mut crate::zlevel::MeshJob, ov: &Overrides) {
+    apply_cutting(ov, &mut job.tool, &mut job.width, &mut job.feed, &mut job.spindle_rpm);
+    if let Some(s) = ov.stepdown {
+        job.stepdown = s;
     }
     if let Some(a) = ov.allowance {
         job.allowance = a;
@@ -176,20 +187,9 @@ pub fn apply_mesh(job: &mut crate::zlevel::MeshJob, ov: &Overrides) {
 
 /// Applies overrides to a job.
 pub fn apply(job: &mut Job, ov: &Overrides) {
-    if let Some(d) = ov.tool_diameter {
-        job.tool.diameter = d;
-    }
-    if let Some(w) = ov.width {
-        job.width = w;
-    }
+    apply_cutting(ov, &mut job.tool, &mut job.width, &mut job.feed, &mut job.spindle_rpm);
     if let Some(s) = ov.stepdown {
         job.stepdown = Some(s);
-    }
-    if let Some(f) = ov.feed {
-        job.feed = f;
-    }
-    if let Some(s) = ov.spindle_rpm {
-        job.spindle_rpm = s;
     }
     if let Some(a) = ov.allowance {
         job.allowance = a;

@@ -1040,19 +1040,22 @@ impl RasterSim {
             if g > 0.0 {
                 out.gouges.push(Event { move_index: mi, at: at.to_array(), depth: g });
             }
-            // cut long moves in pieces (keeps the cell windows small)
-            let xy = path.xy_length();
-            let pieces = (xy / (4.0 * self.r)).ceil().max(1.0) as usize;
-            for k in 0..pieces {
-                let sub = path.sub(k as f64 / pieces as f64, (k + 1) as f64 / pieces as f64);
-                self.cut(&sub);
-            }
+            self.cut_move(&path);
         }
         progress(1.0);
         let cell = self.grid.res * self.grid.res;
         out.removed_volume =
             self.s0.iter().zip(&self.s).filter(|(a, _)| a.is_finite()).map(|(a, b)| (a - b) as f64).sum::<f64>() * cell;
         out
+    }
+
+    /// Cuts a whole move, a long one in pieces of at most four radii (keeps the cell windows
+    /// of [`RasterSim::cut`] small).
+    pub fn cut_move(&mut self, path: &Path) {
+        let pieces = (path.xy_length() / (4.0 * self.r)).ceil().max(1.0) as usize;
+        for k in 0..pieces {
+            self.cut(&path.sub(k as f64 / pieces as f64, (k + 1) as f64 / pieces as f64));
+        }
     }
 
     /// Reachable material left standing more than `tol` above the floor.
