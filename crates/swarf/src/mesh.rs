@@ -20,6 +20,9 @@ use crate::io::stl::Mesh;
 use crate::sim::grid::Grid;
 use rayon::prelude::*;
 
+/// Holes of a shadow smaller than this are filled, mm².
+const PINHOLE: f64 = 1e-3;
+
 /// Shadows of a mesh at decreasing heights.
 #[derive(Debug, Clone)]
 pub struct Shadows<'a> {
@@ -56,7 +59,17 @@ impl<'a> Shadows<'a> {
             .collect();
         if !rings.is_empty() {
             let band = Area::from_rings(&rings, Fill::NonZero);
-            self.shadow = self.shadow.union(&band);
+            // (each band adds its cut points all along the shadow's boundary, most of them on
+            // straight edges: dropped within 1e-5 mm, so the shadow's size follows its shape,
+            // not the number of levels)
+            // (and pinholes, where the facets' projections do not quite tile — a mesh with
+            // T-junctions — pile up by the thousand: holes under 1e-3 mm² are filled, which only
+            // grows the shadow, and no tool fits in them)
+            let mut sh = self.shadow.union(&band).simplified(1e-5);
+            for p in &mut sh.polys {
+                p.holes.retain(|h| crate::geom::ring_area(h).abs() >= PINHOLE);
+            }
+            self.shadow = sh;
         }
         self.z = z;
         &self.shadow
