@@ -26,6 +26,10 @@ enum Cmd {
     /// Rough a job (case JSON, STL part, DXF or SVG): write G-code, and optionally a report and
     /// pictures.
     Rough(RoughArgs),
+    /// Find the cheapest sequence of tools from a tool database for z-level roughing of a 3D
+    /// job (paper 3): one program per tool of that sequence, a JSON report of every sequence
+    /// costed, and a picture of the stock after each tool.
+    Plan(PlanArgs),
     /// Run the built-in example (a pocket with two islands) and write everything into a folder.
     Demo {
         /// Output folder.
@@ -61,6 +65,26 @@ enum UnitsArg {
     In,
     Cm,
     M,
+}
+
+#[derive(Args, Clone)]
+struct PlacementOpts {
+    /// Units of a drawing (DXF, SVG) or an STL part read on its own, whatever the file says.
+    #[arg(long, value_enum)]
+    units: Option<UnitsArg>,
+    /// STL part on its own: scale (25.4 for inches; `--units` works too).
+    #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
+    part_scale: Option<f64>,
+    /// STL part on its own: rotations about X, Y and Z in degrees, in that order (−90,0,0 turns a
+    /// Y-up part Z-up).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    part_rotate: Option<String>,
+    /// STL part on its own: translation after scaling and rotating, mm.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    part_translate: Option<String>,
+    /// STL part on its own: the stock box is its bounds grown by this sideways and on top, mm.
+    #[arg(long, value_name = "MM", default_value_t = 2.0, allow_negative_numbers = true)]
+    stock_margin: f64,
 }
 
 #[derive(Args, Clone)]
@@ -135,28 +159,14 @@ struct CommonOpts {
     /// Skip the simulation (no engagement, gouge or rest figures).
     #[arg(long)]
     no_simulate: bool,
-    /// Drawing units (DXF, SVG) whatever the file says.
-    #[arg(long, value_enum)]
-    units: Option<UnitsArg>,
     /// SVG pixels per inch (96; old Inkscape files use 90).
     #[arg(long, value_name = "PX", default_value_t = 96.0, allow_negative_numbers = true)]
     svg_dpi: f64,
     /// Tolerance for joining loose drawing entities into contours, mm.
     #[arg(long, value_name = "MM", default_value_t = 0.01, allow_negative_numbers = true)]
     chain_tolerance: f64,
-    /// STL part on its own: scale (25.4 for inches; `--units` works too).
-    #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
-    part_scale: Option<f64>,
-    /// STL part on its own: rotations about X, Y and Z in degrees, in that order (−90,0,0 turns a
-    /// Y-up part Z-up).
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
-    part_rotate: Option<String>,
-    /// STL part on its own: translation after scaling and rotating, mm.
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
-    part_translate: Option<String>,
-    /// STL part on its own: the stock box is its bounds grown by this sideways and on top, mm.
-    #[arg(long, value_name = "MM", default_value_t = 2.0, allow_negative_numbers = true)]
-    stock_margin: f64,
+    #[command(flatten)]
+    place: PlacementOpts,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -182,6 +192,55 @@ struct RoughArgs {
     samples: Option<PathBuf>,
     #[command(flatten)]
     opts: CommonOpts,
+}
+
+#[derive(Copy, Clone, PartialEq, Eq, ValueEnum)]
+enum DecompositionArg {
+    /// Algorithm 4: each tool's own path, trimmed to where earlier tools left material.
+    Trim,
+    /// Algorithm 3: a new path over each rest region.
+    Regions,
+}
+
+#[derive(Args)]
+struct PlanArgs {
+    /// Input: a 3D case (.json with part_stl) or an STL part.
+    input: PathBuf,
+    /// Tool database (JSON: machine and tools, as paper 3's Table 1).
+    #[arg(long, value_name = "TOOLS.json")]
+    tools: PathBuf,
+    /// Folder for the programs (01_T1_D80.ngc, ... in cutting order) and the pictures.
+    #[arg(long, value_name = "DIR", default_value = "swarf-plan")]
+    output_dir: PathBuf,
+    /// Report (JSON): the best sequence and every sequence costed (default: DIR/plan.json).
+    #[arg(long, value_name = "PLAN.json")]
+    report: Option<PathBuf>,
+    /// How later tools are confined to the rest material.
+    #[arg(long, value_enum, default_value = "trim")]
+    decomposition: DecompositionArg,
+    /// Cost every candidate sequence (no bound).
+    #[arg(long)]
+    exhaustive: bool,
+    /// Controller dialect.
+    #[arg(long, value_enum, default_value = "linuxcnc")]
+    post: PostArg,
+    /// Largest ramp angle of an entry, degrees.
+    #[arg(long, value_name = "DEG", default_value_t = 3.0, allow_negative_numbers = true)]
+    ramp_angle: f64,
+    /// Clearance above the top of the job for travel, mm.
+    #[arg(long, value_name = "MM", default_value_t = 2.0, allow_negative_numbers = true)]
+    clearance: f64,
+    /// No pictures of the rest material.
+    #[arg(long)]
+    no_pictures: bool,
+    /// Rows of the table printed (the cheapest sequences).
+    #[arg(long, value_name = "N", default_value_t = 15)]
+    rows: usize,
+    #[command(flatten)]
+    place: PlacementOpts,
+    /// Print nothing.
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 /// An error that is the user's fault (exit 2) or not (exit 1).
@@ -220,6 +279,7 @@ fn main() -> ExitCode {
     };
     let res = match cli.cmd {
         Cmd::Rough(a) => rough(a),
+        Cmd::Plan(a) => plan(a),
         Cmd::Demo { out_dir, opts } => demo(&out_dir, &opts),
     };
     match res {
@@ -233,6 +293,7 @@ fn main() -> ExitCode {
 }
 
 fn overrides(o: &CommonOpts) -> Result<Overrides, Failure> {
+    let ov = placement(&o.place)?;
     let mut ov = Overrides {
         tool_diameter: o.tool_diameter,
         width: match (o.engagement, o.stepover) {
@@ -244,10 +305,16 @@ fn overrides(o: &CommonOpts) -> Result<Overrides, Failure> {
         depth: o.depth,
         feed: o.feed,
         spindle_rpm: o.spindle,
-        ..Default::default()
+        ..ov
     };
     ov.import.svg_px_per_inch = o.svg_dpi;
     ov.import.chain_tolerance = o.chain_tolerance;
+    Ok(ov)
+}
+
+/// The overrides of units and of an STL part's placement.
+fn placement(o: &PlacementOpts) -> Result<Overrides, Failure> {
+    let mut ov = Overrides::default();
     ov.import.units = o.units.map(|u| match u {
         UnitsArg::Mm => swarf::swarf_import::Units::Millimetre,
         UnitsArg::In => swarf::swarf_import::Units::Inch,
@@ -569,4 +636,172 @@ fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
         );
     }
     Ok(())
+}
+
+fn plan(a: PlanArgs) -> Result<(), Failure> {
+    let input = swarf::io::load_input(&a.input, &placement(&a.place)?)?;
+    let Input::Mesh(job) = input else {
+        return Err(
+            swarf::Error::input(&a.input, "file", "plan needs a 3D job: a case with part_stl, or an STL part").into()
+        );
+    };
+    let db = swarf::tooldb::ToolDb::read(&a.tools)?;
+    if !(a.clearance.is_finite() && a.clearance >= 0.0) {
+        return Err(swarf::Error::param("--clearance", "must be zero or positive").into());
+    }
+    let opts = swarf::toolseq::SeqOptions {
+        decomposition: match a.decomposition {
+            DecompositionArg::Trim => swarf::toolseq::Decomposition::Trim,
+            DecompositionArg::Regions => swarf::toolseq::Decomposition::Regions,
+        },
+        prune: !a.exhaustive,
+        ramp_deg: a.ramp_angle,
+        clearance: a.clearance,
+    };
+    let t0 = std::time::Instant::now();
+    let sp = swarf::toolseq::plan(&job, &db, &opts)?;
+    let compute_s = t0.elapsed().as_secs_f64();
+    let post = match a.post {
+        PostArg::Linuxcnc => Post::LinuxCnc,
+        PostArg::Grbl => Post::Grbl,
+    };
+    let best = sp.best();
+    let input_name = a.input.file_name().and_then(|s| s.to_str()).unwrap_or("input").to_string();
+    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+    let mut programs = Vec::new();
+    for (i, p) in sp.programs.iter().enumerate() {
+        let stem = format!("{:02}_{}_D{}", i + 1, file_safe(&p.spec.id), swarf::post::num(p.spec.diameter, 3));
+        let mut tp = p.toolpath.clone();
+        tp.quantize(swarf::post::COORD_STEP, swarf::post::CENTER_STEP);
+        let t = tp.totals(db.machine.rapid_feed_mm_min);
+        let header = swarf::post::Header {
+            lines: vec![
+                format!(
+                    "{input_name}: z-level roughing, tool {} of {} in sequence {}",
+                    i + 1,
+                    sp.programs.len(),
+                    best.tools.join(" ")
+                ),
+                format!(
+                    "{} {}: D{} mm, {} teeth, width of cut {} mm, depth of cut {} mm",
+                    p.spec.id,
+                    p.spec.kind,
+                    swarf::post::num(p.spec.diameter, 3),
+                    p.spec.teeth,
+                    swarf::post::num(p.spec.width_of_cut, 3),
+                    swarf::post::num(p.spec.depth_of_cut, 3)
+                ),
+                format!(
+                    "feed {} mm/min, spindle {} rpm, cut {:.0} mm, rapid {:.0} mm, {:.2} min at {} mm/min rapid",
+                    swarf::post::num(p.spec.feed_mm_min(), 1),
+                    swarf::post::num(p.spec.spindle_rpm(), 0),
+                    t.cut_length_mm,
+                    t.rapid_length_mm,
+                    t.time_min,
+                    swarf::post::num(db.machine.rapid_feed_mm_min, 0)
+                ),
+            ],
+            spindle_rpm: p.spec.spindle_rpm(),
+        };
+        let gcode = swarf::post::write(&tp, post, &header);
+        let name = format!("{stem}.ngc");
+        files.push((a.output_dir.join(&name), gcode.into_bytes()));
+        let (rest_max, rest_vol) = sp.rest.rest(i, 0.05);
+        let mut pic = serde_json::Value::Null;
+        if !a.no_pictures {
+            let pname = format!("{stem}_rest.png");
+            files.push((a.output_dir.join(&pname), sp.rest.png(i)?));
+            pic = serde_json::Value::String(pname);
+        }
+        programs.push(serde_json::json!({
+            "file": name,
+            "tool": p.spec.id,
+            "number": p.number,
+            "diameter": p.spec.diameter,
+            "feed_mm_min": p.spec.feed_mm_min(),
+            "spindle_rpm": p.spec.spindle_rpm(),
+            "cut_length_mm": t.cut_length_mm,
+            "rapid_length_mm": t.rapid_length_mm,
+            "time_min": t.time_min,
+            "plunges": t.plunges,
+            "rest_after": {"max_thickness_mm": rest_max, "volume_mm3": rest_vol, "picture": pic},
+        }));
+    }
+    let report = serde_json::json!({
+        "input": input_name,
+        "tools_file": a.tools.display().to_string(),
+        "decomposition": opts.decomposition,
+        "machine": {
+            "cost_per_hour": db.machine.cost_per_hour,
+            "rapid_feed_mm_min": db.machine.rapid_feed_mm_min,
+            "tool_change_min": db.machine.tool_change_min,
+        },
+        "best": {
+            "tools": best.tools,
+            "diameters": best.diameters,
+            "machining_time_min": best.cost.machining_time_min,
+            "machining_cost": best.cost.machining_cost,
+            "tooling_cost": best.cost.tooling_cost,
+            "total_cost": best.cost.total_cost,
+            "programs": programs,
+        },
+        "candidates": sp.candidates,
+        "costed": sp.sequences.len(),
+        "evaluations": sp.evaluations,
+        "compute_s": compute_s,
+        "prepare_s": sp.prepare_s,
+        "search_s": sp.search_s,
+        "sequences": sp.sequences,
+    });
+    let json = serde_json::to_string_pretty(&report).map_err(|e| Failure { user: false, msg: e.to_string() })?;
+    let report_path = a.report.clone().unwrap_or_else(|| a.output_dir.join("plan.json"));
+    files.push((report_path.clone(), (json + "\n").into_bytes()));
+    std::fs::create_dir_all(&a.output_dir)
+        .with_context(|| format!("{}: cannot create the folder", a.output_dir.display()))?;
+    write_all_atomic(&files)?;
+    if !a.quiet {
+        println!("{}", plan_table(&sp, a.rows));
+        println!(
+            "best: {} (D {}), {:.2} min, {:.2} $; {} of {} candidate sequences costed, {} tool runs, {:.2} s",
+            best.tools.join(", "),
+            best.diameters.iter().map(|d| swarf::post::num(*d, 3)).collect::<Vec<_>>().join(", "),
+            best.cost.machining_time_min,
+            best.cost.total_cost,
+            sp.sequences.len(),
+            sp.candidates,
+            sp.evaluations,
+            compute_s
+        );
+        println!(
+            "wrote {} programs into {} and the report {}",
+            sp.programs.len(),
+            a.output_dir.display(),
+            report_path.display()
+        );
+    }
+    Ok(())
+}
+
+/// The cheapest sequences as paper 3's Table 2: diameters, time and cost.
+fn plan_table(sp: &swarf::toolseq::SeqPlan, rows: usize) -> String {
+    let mut out = format!(
+        "{:<36} {:>10} {:>12} {:>11} {:>11}\n",
+        "tool sequence (diameters)", "time min", "machining $", "tooling $", "total $"
+    );
+    for s in sp.sequences.iter().take(rows) {
+        let d = s.diameters.iter().map(|d| swarf::post::num(*d, 3)).collect::<Vec<_>>().join(", ");
+        out.push_str(&format!(
+            "{:<36} {:>10.2} {:>12.2} {:>11.2} {:>11.2}\n",
+            d, s.cost.machining_time_min, s.cost.machining_cost, s.cost.tooling_cost, s.cost.total_cost
+        ));
+    }
+    if sp.sequences.len() > rows {
+        out.push_str(&format!("... {} more in the report\n", sp.sequences.len() - rows));
+    }
+    out
+}
+
+/// A tool id as part of a file name.
+fn file_safe(id: &str) -> String {
+    id.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect()
 }

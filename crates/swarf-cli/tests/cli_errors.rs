@@ -441,3 +441,43 @@ fn demo_writes_every_output() {
     let out = swarf(&dir, &["rough", "demo_pocket.json", "-o", "again.ngc", "-q", "--no-simulate"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }
+
+/// `swarf plan` refuses a 2D job and a bad tool database with one line naming the file and the
+/// place, exit code 2, and no output folder.
+#[test]
+fn plan_errors() {
+    let dir = TempDir::new("plan-errors");
+    let tools = dir.write(
+        "tools.json",
+        r#"{"machine": {"cost_per_hour": 50, "rapid_feed_mm_min": 30000, "tool_change_min": 0.5},
+            "tools": [{"id": "T1", "type": "insert", "teeth": 3, "diameter": -20, "width_of_cut": 10,
+              "depth_of_cut": 3, "feed_per_tooth": 0.2, "cutting_speed_m_min": 80, "price": 72, "life_min": 60}]}"#,
+    );
+    let good = dir.write(
+        "good.json",
+        r#"{"machine": {"cost_per_hour": 50, "rapid_feed_mm_min": 30000, "tool_change_min": 0.5},
+            "tools": [{"id": "T1", "type": "insert", "teeth": 3, "diameter": 20, "width_of_cut": 10,
+              "depth_of_cut": 3, "feed_per_tooth": 0.2, "cutting_speed_m_min": 80, "price": 72, "life_min": 60}]}"#,
+    );
+    let part = dir.write(
+        "part.stl",
+        "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 10 0 0\nvertex 0 10 0\nendloop\nendfacet\nendsolid t\n",
+    );
+    let before = dir.listing();
+    let flat = case("square_pocket.json");
+    let runs: [(&Path, &Path, &[&str]); 2] =
+        [(&flat, &good, &["square_pocket.json", "3D job"]), (&part, &tools, &["tools.json", "tools[0].diameter"])];
+    for (input, db, needles) in runs {
+        let args =
+            ["plan", input.to_str().expect("utf-8"), "--tools", db.to_str().expect("utf-8"), "--output-dir", "out"];
+        let out = swarf(dir.path(), &args);
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        for n in needles {
+            assert!(stderr.contains(n), "{stderr:?} lacks {n:?}");
+        }
+    }
+    assert_eq!(dir.listing(), before, "files were left behind");
+}

@@ -413,12 +413,8 @@ fn interpreter_errors_are_caught() {
     assert_eq!((c.traverses, c.feeds, c.arcs), (1, 1, 1));
 }
 
-/// A 3D case: a 60 × 60 × 10 mm block with a 30 × 30 mm pocket 6 mm deep (an ASCII STL written
-/// here), z-level roughing.
-#[test]
-fn zlevel_mesh_linuxcnc() {
-    let Some(rs274) = rs274() else { return };
-    let dir = TempDir::new("zlevel-mesh");
+/// A 60 × 60 × 10 mm block with a 30 × 30 mm pocket 6 mm deep, as an ASCII STL case in `dir`.
+fn block_case(dir: &TempDir) -> PathBuf {
     let mut f: Vec<[[f64; 3]; 3]> = Vec::new();
     let mut quad = |a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]| {
         f.push([a, b, c]);
@@ -448,13 +444,75 @@ fn zlevel_mesh_linuxcnc() {
     }
     stl += "endsolid block\n";
     dir.write("block.stl", stl);
-    let case = dir.write(
+    dir.write(
         "block.json",
         r#"{"tool": {"diameter": 6}, "stock_box": [-30, -30, 0, 30, 30, 10], "part_stl": "block.stl", "stepdown": 2.5}"#,
-    );
+    )
+}
+
+/// A 3D case (the block with a pocket), z-level roughing.
+#[test]
+fn zlevel_mesh_linuxcnc() {
+    let Some(rs274) = rs274() else { return };
+    let dir = TempDir::new("zlevel-mesh");
+    let case = block_case(&dir);
     let mut bad = Vec::new();
     for strategy in ["adaptive", "offset"] {
         bad.extend(check_case(&rs274, &case, strategy, "linuxcnc", &["--res", "0.1"]));
     }
     assert!(bad.is_empty(), "{} problem(s):\n{}", bad.len(), bad.join("\n"));
+}
+
+/// `swarf plan` on the block with three tools: every program of the chosen sequence goes
+/// through the interpreter, with its tool change, and its feed length and rapid count match
+/// the plan's report.
+#[test]
+fn plan_programs_linuxcnc() {
+    let Some(rs274) = rs274() else { return };
+    let dir = TempDir::new("plan");
+    let case = block_case(&dir);
+    let tools = dir.write(
+        "tools.json",
+        r#"{"machine": {"cost_per_hour": 50, "rapid_feed_mm_min": 30000, "tool_change_min": 0.5},
+            "tools": [
+              {"id": "T1", "type": "insert", "teeth": 3, "diameter": 20, "width_of_cut": 10, "depth_of_cut": 3,
+               "feed_per_tooth": 0.2, "cutting_speed_m_min": 80, "price": 72, "life_min": 60},
+              {"id": "T2", "type": "carbide", "teeth": 4, "diameter": 10, "width_of_cut": 5, "depth_of_cut": 2,
+               "feed_per_tooth": 0.05, "cutting_speed_m_min": 60, "price": 120, "life_min": 45},
+              {"id": "T3", "type": "carbide", "teeth": 4, "diameter": 4, "width_of_cut": 2, "depth_of_cut": 1,
+               "feed_per_tooth": 0.02, "cutting_speed_m_min": 60, "price": 40, "life_min": 45}]}"#,
+    );
+    let out = dir.path().join("out");
+    let run = Command::new(env!("CARGO_BIN_EXE_swarf"))
+        .arg("plan")
+        .arg(&case)
+        .arg("--tools")
+        .arg(&tools)
+        .arg("--output-dir")
+        .arg(&out)
+        .arg("--quiet")
+        .output()
+        .expect("run swarf");
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).expect("report")).expect("json");
+    assert_eq!(report["candidates"], 4);
+    let programs = report["best"]["programs"].as_array().expect("programs");
+    assert!(!programs.is_empty());
+    assert_eq!(programs.last().unwrap()["tool"], "T3", "every sequence ends with the smallest tool");
+    let mut names = Vec::new();
+    for p in programs {
+        let name = p["file"].as_str().expect("file");
+        names.push(name.to_string());
+        let ngc = out.join(name);
+        let text = std::fs::read_to_string(&ngc).expect("program");
+        let number = p["number"].as_u64().expect("number");
+        assert!(text.contains(&format!("T{number} M6")), "{name}: no tool change");
+        let canon = interpret(&rs274, &ngc).and_then(|t| parse_canon(&t)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let want = p["cut_length_mm"].as_f64().expect("length");
+        assert!((canon.feed_length - want).abs() <= 1e-3 * want + 0.05, "{name}: {} vs {want}", canon.feed_length);
+    }
+    let mut sorted = names.clone();
+    sorted.sort();
+    assert_eq!(sorted, names, "sorting by name gives the cutting order");
 }

@@ -10,7 +10,11 @@
 //! - `plan/offset`, `plan/zigzag`: the time of each strategy, planning only (`simulate: false`);
 //! - `edt/walls`: the distance transform of the part's cells over the planning grid (the
 //!   adaptive planner's distance to the walls), in cells per second;
-//! - `rough/offset+sim`: a full `rough()` with the simulation for the report.
+//! - `rough/offset+sim`: a full `rough()` with the simulation for the report;
+//! - `toolseq/table1-exhaustive`: paper 3's search costing every candidate sequence of Table 1's
+//!   eight tools (`examples/tools/table1.json`) on `examples/3d/bowl_cavity.json` (the
+//!   tools' own geometry included). The same run on any other 3D case:
+//!   `swarf plan CASE --tools examples/tools/table1.json --exhaustive` prints its time.
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use std::hint::black_box;
@@ -198,5 +202,21 @@ fn full(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, engagement, replay, plan, edt, full);
+fn toolseq(c: &mut Criterion) {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples");
+    let case = std::path::PathBuf::from(format!("{root}/3d/bowl_cavity.json"));
+    let swarf::io::case::Input::Mesh(job) = swarf::io::load_input(&case, &Default::default()).expect("case") else {
+        panic!("a 3D case")
+    };
+    let db = swarf::tooldb::ToolDb::read(std::path::Path::new(&format!("{root}/tools/table1.json"))).expect("tools");
+    let opts = swarf::toolseq::SeqOptions { prune: false, ..Default::default() };
+    let mut g = c.benchmark_group("toolseq");
+    g.sample_size(10).measurement_time(Duration::from_secs(30));
+    g.bench_function("table1-exhaustive", |b| {
+        b.iter(|| black_box(swarf::toolseq::plan(&job, &db, &opts).expect("plan").sequences.len()))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, engagement, replay, plan, edt, full, toolseq);
 criterion_main!(benches);

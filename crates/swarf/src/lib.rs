@@ -44,6 +44,7 @@ pub mod sim;
 pub mod strategy;
 pub mod tooldb;
 pub mod toolpath;
+pub mod toolseq;
 pub mod zlevel;
 
 pub use error::{Error, Result};

@@ -132,10 +132,15 @@ impl MeshJob {
     /// (raised by the floor allowance), and the flats of the part (raised by as much) between
     /// them.
     pub fn levels(&self) -> Vec<f64> {
+        self.levels_every(self.stepdown)
+    }
+
+    /// The levels as [`MeshJob::levels`] with step-downs of at most `stepdown`.
+    pub fn levels_every(&self, stepdown: f64) -> Vec<f64> {
         let top = self.stock_hi.z;
         // (the floor is protected like the part: with its allowance on top)
         let bottom = self.floor + self.allowance_floor;
-        let n = (((top - bottom) / self.stepdown) - 1e-9).ceil().max(1.0) as usize;
+        let n = (((top - bottom) / stepdown) - 1e-9).ceil().max(1.0) as usize;
         let mut zs: Vec<f64> =
             (1..=n).map(|i| if i == n { bottom } else { top - (top - bottom) * i as f64 / n as f64 }).collect();
         for f in crate::mesh::flats(&self.mesh, 1e-6) {
@@ -194,6 +199,18 @@ fn model(job: &MeshJob, sim: &SimOptions) -> Result<RasterSim> {
     RasterSim::new(&mj, &regions, &opts)
 }
 
+/// The region a level must not enter: the shadow grown by the allowance. The union of
+/// thousands of facets has a vertex wherever two of them meet, so the shadow is simplified
+/// within [`SHADOW_SIMPLIFY`] and grown by as much (the keep only grows, and the offsets of the
+/// regions take a fraction of the time); the offset's output, which has runs of points a few µm
+/// apart where its joins overlapped, is simplified within 1 µm after growing by 1 µm more.
+pub(crate) fn keep_of(shadow: &Area, allowance: f64) -> Area {
+    shadow
+        .simplified(SHADOW_SIMPLIFY)
+        .offset(allowance + SHADOW_GROW + SHADOW_SIMPLIFY + 0.001, REGION_TOL)
+        .simplified(0.001)
+}
+
 /// Cuts every move of `tp` into `sim` (no measurements).
 fn cut_all(sim: &mut RasterSim, tp: &Toolpath) {
     for (from, m) in tp.segments() {
@@ -218,15 +235,7 @@ pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -
         let ts = Instant::now();
         let shadow = shadows.down_to(z - job.allowance_floor);
         let t_shadow = ts.elapsed().as_secs_f64();
-        // (the union of thousands of facets has a vertex wherever two of them meet: simplified
-        // within SHADOW_SIMPLIFY and grown by as much, so the keep only grows, the regions'
-        // offsets take a fraction of the time)
-        // (and the offset's output, which has runs of points a few µm apart where its joins
-        // overlapped, simplified within 1 µm after growing by 1 µm more)
-        let keep = shadow
-            .simplified(SHADOW_SIMPLIFY)
-            .offset(job.allowance + SHADOW_GROW + SHADOW_SIMPLIFY + 0.001, REGION_TOL)
-            .simplified(0.001);
+        let keep = keep_of(shadow, job.allowance);
         if debug {
             eprintln!(
                 "shadow at z {z:.3}: {} vertices in {t_shadow:.3} s, keep {} vertices ({} rings) in {:.3} s",
