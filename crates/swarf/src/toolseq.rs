@@ -11,8 +11,9 @@
 //! (the stock minus the part's shadow above the level grown by the tool radius), its
 //! contour-parallel path (Algorithm 1: `C`, `C ⊖ ae`, `C ⊖ 2ae`, … until empty, cut from the
 //! inside out, nested loops joined by a straight step where it stays inside `C`), and the area
-//! the tool clears there, its accessible area `A = C ⊕ r` (Algorithm 2). Because the width of
-//! cut is at most the radius, the loops leave nothing of `A` uncut.
+//! the tool clears there, its accessible area `A = C ⊕ r` (Algorithm 2). The width of cut is
+//! capped at the radius (Table 1's is exactly the radius): then every point of `C` is within
+//! `ae ≤ r` of a loop, so the loops leave nothing of `A` uncut and `A` is what the level clears.
 //!
 //! **Per tool and prefix** (the tools before it in the sequence), Algorithm 4: the material
 //! left at a level `z` is the stock minus the part and minus, for each earlier tool, its
@@ -555,7 +556,7 @@ fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<Prepared> {
             let tb = Instant::now();
             let access = centres.offset(r - 0.01, REGION_TOL);
             let tc = Instant::now();
-            let chains = chains_of(&centres, spec.width_of_cut.min(spec.diameter));
+            let chains = chains_of(&centres, spec.width_of_cut.min(spec.diameter / 2.0));
             if debug {
                 eprintln!(
                     "toolseq: D{} z {:.3}: centres {:.3} s ({} vertices), access {:.3} s, {} chains {:.3} s",
@@ -852,7 +853,7 @@ fn level_cut<'a>(prep: &Prepared, k: usize, lv: &'a Level, prefix: &[usize], mat
             if region.is_empty() {
                 return none;
             }
-            let chains = chains_of(&region, tg.spec.width_of_cut.min(tg.spec.diameter))
+            let chains = chains_of(&region, tg.spec.width_of_cut.min(tg.spec.diameter / 2.0))
                 .into_iter()
                 .map(|c| {
                     let need: Vec<bool> = c.pts.iter().map(|&p| meets(p)).collect();
@@ -1071,12 +1072,6 @@ impl Emitter<'_> {
                 self.tp.rapid(DVec3::new(p.x, p.y, z0 + APPROACH));
                 self.tp.line(MoveKind::Descend, DVec3::new(p.x, p.y, z0), self.feed);
                 let ring_len = c.at[c.ring_end];
-                if std::env::var("SWARF_DEBUG").is_ok() {
-                    eprintln!(
-                        "toolseq: ramp at {p:?} z {z:.3} from {z0:.3}, loop {ring_len:.2} mm, chain {:.1} mm",
-                        c.at[c.pts.len() - 1]
-                    );
-                }
                 if ring_len < 1e-6 {
                     self.tp.line(MoveKind::Plunge, DVec3::new(p.x, p.y, z), self.feed);
                 } else {
