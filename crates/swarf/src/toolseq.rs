@@ -196,6 +196,9 @@ impl SeqPlan {
     }
 }
 
+/// Most tools a search takes (2^(n−1) candidate sequences).
+pub const MAX_TOOLS: usize = 20;
+
 /// Points of a path are this far apart at most when trimmed (mm).
 const SAMPLE: f64 = 0.5;
 /// The tool disk is grown by this when it is asked whether it meets material (mm): more than
@@ -495,6 +498,16 @@ fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<Prepared> {
     job.validate()?;
     if db.tools.is_empty() {
         return Err(Error::param("tools", "the tool database has no tools"));
+    }
+    if db.tools.len() > MAX_TOOLS {
+        return Err(Error::param(
+            "tools",
+            format!(
+                "{} tools: the search covers every subset of them (2^{} sequences); at most {MAX_TOOLS}",
+                db.tools.len(),
+                db.tools.len() - 1
+            ),
+        ));
     }
     if !(opts.ramp_deg.is_finite() && opts.ramp_deg > 0.0 && opts.ramp_deg < 90.0) {
         return Err(Error::param("ramp", format!("{}°: must be between 0 and 90", opts.ramp_deg)));
