@@ -249,7 +249,9 @@ pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -
         // the level is planned on what the levels above left
         let heights = HeightMap { grid: state.grid, stock: state.heights().to_vec(), part: None };
         let lopts = RoughOptions {
-            sim: SimOptions { heights: Some(Arc::new(heights)), ..opts.sim.clone() },
+            // (rapids at depth cross whole levels of cleared stock: checked against the
+            // surely cut heights)
+            sim: SimOptions { heights: Some(Arc::new(heights)), sure_links: true, ..opts.sim.clone() },
             params: crate::strategy::Params { corner_fillets: false, full_wall_contour: true, ..opts.params.clone() },
             ..opts.clone()
         };

@@ -46,6 +46,11 @@ pub struct SimOptions {
     /// state a 3D job's earlier levels and tools left, and the part's surface (see
     /// [`HeightMap`]).
     pub heights: Option<std::sync::Arc<HeightMap>>,
+    /// Keep the surely cut heights too (see [`raster::RasterSim::is_clear`]) and check links and
+    /// rapids against them: a speck narrower than a cell between sweeps then never meets a
+    /// rapid. On for the levels of z-level roughing, whose long rapids at depth cross large
+    /// cleared areas; it makes cutting in the model about a tenth slower.
+    pub sure_links: bool,
 }
 
 impl Default for SimOptions {
@@ -58,6 +63,7 @@ impl Default for SimOptions {
             sample_step: None,
             max_cells: 60_000_000,
             heights: None,
+            sure_links: false,
         }
     }
 }

@@ -274,6 +274,14 @@ pub struct RasterSim {
     ring_delta: f64,
     sample_step: f64,
     s: Vec<f32>,
+    /// The heights the cuts surely reached: a cell is lowered here only by a cut whose disk
+    /// holds the whole cell, not just its centre. Where several sweeps meet, a speck of
+    /// material narrower than a cell can stand between them although every cell centre near
+    /// it was cut (`s` then reads it as cut); rapids are checked against these heights, so
+    /// that they never pass through such a speck.
+    sure: Vec<f32>,
+    /// Half the diagonal of a cell (the farthest a point of a cell lies from its centre).
+    half_diag: f64,
     s0: Vec<f32>,
     p: Vec<f32>,
     /// Initial cell states (see [`state`]).
@@ -293,8 +301,9 @@ pub struct RasterSim {
     /// Cells (i0, i1, j0, j1) whose material at the level was cleared since the last
     /// [`RasterSim::take_dirty`].
     dirty: Option<(usize, usize, usize, usize)>,
-    /// Highest material per block of `BLOCK`×`BLOCK` cells, and how many cells of the block
-    /// stand at that height (the block is read again when the last of them is lowered): lets
+    /// Highest material per block of `BLOCK`×`BLOCK` cells by the heights links are checked
+    /// against (so an upper bound of the heights too), and how many cells of the block stand at that height
+    /// (the block is read again when the last of them is lowered): lets
     /// [`RasterSim::max_height_near`] skip whole blocks.
     bmax: Vec<f32>,
     bcnt: Vec<u32>,
@@ -382,6 +391,8 @@ impl RasterSim {
             ring_delta: opts.ring_delta,
             sample_step: opts.sample_step.unwrap_or(res / 2.0),
             s: s0.clone(),
+            sure: if opts.sure_links { s0.clone() } else { Vec::new() },
+            half_diag: res * std::f64::consts::FRAC_1_SQRT_2,
             s0,
             p,
             state: st,
@@ -456,7 +467,7 @@ impl RasterSim {
         let mut m = f32::NEG_INFINITY;
         let mut n = 0;
         for j in j0..=j1 {
-            for &h in &self.s[j * self.grid.nx + i0..=j * self.grid.nx + i1] {
+            for &h in &self.link_heights()[j * self.grid.nx + i0..=j * self.grid.nx + i1] {
                 if h > m {
                     m = h;
                     n = 1;
@@ -466,6 +477,13 @@ impl RasterSim {
             }
         }
         (m, n)
+    }
+
+    /// The heights links and rapids are checked against: the surely cut heights when they are
+    /// kept, else the heights.
+    #[inline]
+    fn link_heights(&self) -> &[f32] {
+        if self.sure.is_empty() { &self.s } else { &self.sure }
     }
 
     /// Tool radius.
@@ -478,7 +496,8 @@ impl RasterSim {
         self.grid.cell_of(q).map_or(f32::NEG_INFINITY, |(i, j)| self.s[j * self.grid.nx + i])
     }
 
-    /// Highest material within `rho` of the path (−∞ when none).
+    /// Highest material within `rho` of the path (−∞ when none), by the heights links are
+    /// checked against (see the field `sure`).
     pub fn max_height_near(&self, path: &Path, rho: f64) -> f32 {
         let (lo, hi) = path.bbox(rho);
         let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) else { return f32::NEG_INFINITY };
@@ -507,7 +526,7 @@ impl RasterSim {
                 }
                 for j in cj0..=cj1 {
                     for i in ci0..=ci1 {
-                        let h = self.s[j * self.grid.nx + i];
+                        let h = self.link_heights()[j * self.grid.nx + i];
                         if h > best && f.distance(self.grid.center(i, j)) <= rho {
                             best = h;
                         }
@@ -519,10 +538,12 @@ impl RasterSim {
     }
 
     /// True when no material stands more than `eps` above the tip anywhere the tool passes
-    /// along `path` (checked with the full radius plus `margin`).
+    /// along `path` (checked with the full radius plus `margin`, against the heights links are
+    /// checked against: see the field `sure`).
     pub fn is_clear(&self, path: &Path, margin: f64) -> bool {
         let mut clear = true;
-        visit_above(&self.grid, &self.s, Some((&self.bmax, self.nbx)), path, self.r + margin, self.eps, |_, _, _| {
+        let rho = self.r + margin;
+        visit_above(&self.grid, self.link_heights(), Some((&self.bmax, self.nbx)), path, rho, self.eps, |_, _, _| {
             clear = false;
             false
         });
@@ -534,7 +555,7 @@ impl RasterSim {
     /// start, standing above its tip) does not count. `None` when the move reaches any other
     /// material; otherwise how far along it (mm) the tool has left the touched material
     /// behind — from there on it touches nothing (0 when it touches nothing at all), so the
-    /// rest can be a rapid.
+    /// rest can be a rapid. Read like [`Self::is_clear`].
     pub fn leaving_distance(&self, a: DVec3, b: DVec3, margin: f64) -> Option<f64> {
         let rho = self.r + margin;
         let path = Path::Line { a, b };
@@ -543,8 +564,9 @@ impl RasterSim {
         let u = if len > 1e-12 { (b2 - a2) / len } else { DVec2::ZERO };
         let mut clear = true;
         let mut t: f64 = 0.0;
-        visit_above(&self.grid, &self.s, Some((&self.bmax, self.nbx)), &path, rho, self.eps, |k, q, _| {
-            if (q - a2).length() <= rho && self.s[k] as f64 > a.z + self.eps {
+        let h = self.link_heights();
+        visit_above(&self.grid, h, Some((&self.bmax, self.nbx)), &path, rho, self.eps, |k, q, _| {
+            if (q - a2).length() <= rho && h[k] as f64 > a.z + self.eps {
                 // the points of the line within `rho` of q end at its projection plus the
                 // half chord
                 let d = q - a2;
@@ -583,9 +605,12 @@ impl RasterSim {
         }
     }
 
-    /// Cuts the path into the material.
+    /// Cuts the path into the material (and into the surely cut heights, when they are kept,
+    /// by the radius less half a cell's diagonal).
     pub fn cut(&mut self, path: &Path) {
         let r = self.r;
+        let rs = r - self.half_diag;
+        let sure = !self.sure.is_empty();
         let (lo, hi) = path.bbox(r);
         if let Some((i0, i1, j0, j1)) = self.grid.range(lo, hi) {
             let (z0, z1) = path.z_range();
@@ -601,20 +626,31 @@ impl RasterSim {
                     }
                     for i in i0..=i1 {
                         let k = j * self.grid.nx + i;
-                        let h = self.s[k];
+                        // (sure >= s everywhere: nothing to do when the path is not below it)
+                        let h = self.link_heights()[k];
                         if h == f32::NEG_INFINITY {
                             continue;
                         }
                         let q = self.grid.center(i, j);
-                        let z = if let Some((f, z)) = &flat {
-                            if *z < h && f.distance(q) <= r { *z } else { continue }
-                        } else if let Some(z) = path.reach_zmin(q, r) {
-                            let z = z as f32;
-                            if z < h { z } else { continue }
+                        if let Some((f, z)) = &flat {
+                            if *z >= h {
+                                continue;
+                            }
+                            let d = f.distance(q);
+                            if d <= r {
+                                self.lower(k, *z);
+                            }
+                            if sure && d <= rs {
+                                self.lower_sure(k, *z);
+                            }
                         } else {
-                            continue;
-                        };
-                        self.lower(k, z);
+                            if let Some(z) = path.reach_zmin(q, r) {
+                                self.lower(k, z as f32);
+                            }
+                            if sure && let Some(z) = path.reach_zmin(q, rs) {
+                                self.lower_sure(k, z as f32);
+                            }
+                        }
                     }
                 }
             }
@@ -640,13 +676,31 @@ impl RasterSim {
                 });
             }
             self.s[k] = z;
-            let b = (k / self.grid.nx / BLOCK) * self.nbx + (k % self.grid.nx) / BLOCK;
-            if h == self.bmax[b] {
-                self.bcnt[b] -= 1;
-                if self.bcnt[b] == 0 {
-                    self.read_block(b);
-                }
+            if self.sure.is_empty() {
+                self.lowered_block(k, h);
             }
+        }
+    }
+
+    /// Cell `k` of the heights the block maxima follow was lowered from `h`.
+    #[inline]
+    fn lowered_block(&mut self, k: usize, h: f32) {
+        let b = (k / self.grid.nx / BLOCK) * self.nbx + (k % self.grid.nx) / BLOCK;
+        if h == self.bmax[b] {
+            self.bcnt[b] -= 1;
+            if self.bcnt[b] == 0 {
+                self.read_block(b);
+            }
+        }
+    }
+
+    /// Lowers cell `k` of the surely cut heights to `z`, keeping the block maxima.
+    #[inline]
+    fn lower_sure(&mut self, k: usize, z: f32) {
+        let h = self.sure[k];
+        if z < h {
+            self.sure[k] = z;
+            self.lowered_block(k, h);
         }
     }
 
@@ -687,7 +741,20 @@ impl RasterSim {
     /// tolerance cuts by the radius less that tolerance, so that it never counts as cut what the
     /// emitted program leaves).
     pub fn cut_step_r(&mut self, a: DVec2, b: DVec2, z: f64, r: f64) -> usize {
+        let count = self.step_layer(a, b, z, r, false);
+        if !self.sure.is_empty() {
+            self.step_layer(a, b, z, r - self.half_diag, true);
+        }
+        count
+    }
+
+    /// The row scan of [`Self::cut_step_r`] with radius `r`, on the heights (`sure` false) or
+    /// on the surely cut heights.
+    fn step_layer(&mut self, a: DVec2, b: DVec2, z: f64, r: f64, sure: bool) -> usize {
         let mut count = 0;
+        if r <= 0.0 {
+            return 0;
+        }
         let res = self.grid.res;
         let zf = z as f32;
         let lo_y = a.y.min(b.y) - r;
@@ -716,11 +783,16 @@ impl RasterSim {
             for (ra, rb) in runs {
                 for i in ra..=rb {
                     let k = row + i as usize;
-                    if self.s[k] > zf {
+                    let above = if sure { self.sure[k] > zf } else { self.s[k] > zf };
+                    if above {
                         let q = DVec2::new(x0 + (i as f64 + 0.5) * res, y);
                         let t = ((q - a).dot(ab) * inv).clamp(0.0, 1.0);
                         if (a + ab * t - q).length_squared() <= r * r {
-                            self.lower(k, zf);
+                            if sure {
+                                self.lower_sure(k, zf);
+                            } else {
+                                self.lower(k, zf);
+                            }
                             count += 1;
                         }
                     }
@@ -1159,6 +1231,42 @@ mod tests {
     }
 
     #[test]
+    fn a_speck_between_two_sweeps_keeps_rapids_out() {
+        let job = Job {
+            floor: -5.0,
+            width: Width::Stepover(0.25),
+            ..Job::new("t", Area::rect(-20.0, -20.0, 20.0, 20.0), Area::empty(), 6.0, 5.0)
+        };
+        let regions = job.regions(job.radius(), 0.0).expect("regions");
+        let opts = SimOptions { res: Some(0.1), sure_links: true, ..Default::default() };
+        let mut s = RasterSim::new(&job, &regions, &opts).expect("simulator");
+        let mut plain = sim();
+        let z = -2.0;
+        // (the model without the surely cut heights does not see the speck)
+        plain.cut_step(DVec2::new(-10.0, 0.0), DVec2::new(10.0, 0.0), z);
+        plain.cut_step(DVec2::new(-10.0, 6.02), DVec2::new(10.0, 6.02), z);
+        assert!(plain.is_clear(&Path::Line { a: DVec3::new(-3.0, 3.01, z), b: DVec3::new(3.0, 3.01, z) }, 0.0));
+        // two passes 6.02 mm apart with a Ø6 tool: a strip 0.02 mm wide stands between them,
+        // at y 3.00–3.02, and no cell centre (…, 2.95, 3.05, …) lies in it
+        s.cut_step(DVec2::new(-10.0, 0.0), DVec2::new(10.0, 0.0), z);
+        s.cut_step(DVec2::new(-10.0, 6.02), DVec2::new(10.0, 6.02), z);
+        for y in [2.95, 3.05] {
+            assert_eq!(s.height_at(DVec2::new(0.0, y)), z as f32, "every centre near the strip reads cut");
+        }
+        let way = Path::Line { a: DVec3::new(-3.0, 3.01, z), b: DVec3::new(3.0, 3.01, z) };
+        assert!(!s.is_clear(&way, 0.0), "a rapid along the strip would hit it");
+        assert!(s.max_height_near(&way, 1.0) > z as f32);
+        // nor may a link cross it
+        assert_eq!(s.leaving_distance(DVec3::new(0.0, 4.0, z), DVec3::new(0.0, 2.0, z), 0.0), None);
+        // (the first step of a pass leaves its start disk to the step before: the way keeps
+        // off it)
+        // a pass along the strip removes it
+        s.cut_step(DVec2::new(-10.0, 3.01), DVec2::new(10.0, 3.01), z);
+        assert!(s.is_clear(&way, 0.0));
+        assert_eq!(s.leaving_distance(DVec3::new(0.0, 4.0, z), DVec3::new(0.0, 2.0, z), 0.0), Some(0.0));
+    }
+
+    #[test]
     fn block_maxima_give_the_same_answer_as_every_cell() {
         let mut s = sim();
         // cut a few steps at two depths so that blocks hold several heights
@@ -1171,7 +1279,7 @@ mod tests {
             for j in 0..g.ny {
                 for i in 0..g.nx {
                     if (g.center(i, j) - p).length() <= rho {
-                        best = best.max(s.heights()[j * g.nx + i]);
+                        best = best.max(s.link_heights()[j * g.nx + i]);
                     }
                 }
             }
