@@ -45,6 +45,8 @@ enum StrategyArg {
     Adaptive,
     Offset,
     Zigzag,
+    /// C1 circles along the medial axis, joined by bi-tangent lines (paper 2)
+    Medial,
 }
 
 #[derive(Copy, Clone, PartialEq, Eq, ValueEnum)]
@@ -355,6 +357,7 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
             StrategyArg::Adaptive => StrategyKind::Adaptive,
             StrategyArg::Offset => StrategyKind::Offset,
             StrategyArg::Zigzag => StrategyKind::Zigzag,
+            StrategyArg::Medial => StrategyKind::Medial,
         },
         climb: !o.conventional,
         offset_order: match o.order {

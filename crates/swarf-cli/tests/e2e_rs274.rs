@@ -372,6 +372,16 @@ fn zigzag_grbl() {
     run_all("zigzag", "grbl");
 }
 
+#[test]
+fn medial_linuxcnc() {
+    run_all("medial", "linuxcnc");
+}
+
+#[test]
+fn medial_grbl() {
+    run_all("medial", "grbl");
+}
+
 /// A few option combinations the cases do not have: several levels (entries at every level),
 /// the finishing contour with stock to leave, outside-in conventional offsets, an angled zigzag
 /// given by engagement.

@@ -226,7 +226,9 @@ pub fn plan(job: &Job, opts: &RoughOptions) -> Result<Option<Planned>> {
     if debug {
         eprintln!("passes {:.3} s ({} passes)", t0.elapsed().as_secs_f64(), passes.len());
     }
-    if passes.is_empty() && opts.params.strategy != strategy::StrategyKind::Adaptive {
+    if passes.is_empty()
+        && !matches!(opts.params.strategy, strategy::StrategyKind::Adaptive | strategy::StrategyKind::Medial)
+    {
         return Ok(None);
     }
     let zs = job.levels();
@@ -239,6 +241,8 @@ pub fn plan(job: &Job, opts: &RoughOptions) -> Result<Option<Planned>> {
     };
     let toolpath = if opts.params.strategy == strategy::StrategyKind::Adaptive {
         plan::adaptive::link_adaptive(job, &regions, &geom, &opts.params, &zs, &finish, &opts.sim)?
+    } else if opts.params.strategy == strategy::StrategyKind::Medial {
+        plan::medial::link_medial(job, &regions, &geom, &opts.params, &zs, &finish, &opts.sim)?
     } else {
         plan::link(job, &regions, &opts.params, &levels, &finish, &opts.sim)?
     };

@@ -223,6 +223,47 @@ impl Toolpath {
         self.push(kind, Motion::Arc { center, ccw }, to, feed);
     }
 
+    /// The turns between consecutive cutting moves, in degrees, with the index of the move
+    /// after each turn: the angle between the XY direction in which one feed move ends and the
+    /// next begins. Rapids break the chain; moves without XY motion (straight descents) are
+    /// stepped over. A tangent-continuous (C1) program reads 0 everywhere.
+    pub fn cutting_turns(&self) -> Vec<(usize, f64)> {
+        let mut out = Vec::new();
+        let mut last: Option<DVec2> = None;
+        for (i, (from, m)) in self.segments().enumerate() {
+            if m.is_rapid() {
+                last = None;
+                continue;
+            }
+            let (a, b) = (from.truncate(), m.to.truncate());
+            let (t0, t1) = match m.motion {
+                Motion::Line => {
+                    let d = b - a;
+                    if d.length() < 1e-9 {
+                        continue;
+                    }
+                    (d.normalize(), d.normalize())
+                }
+                Motion::Arc { center, ccw } => {
+                    let s = if ccw { 1.0 } else { -1.0 };
+                    let tan = |p: DVec2| {
+                        let r = (p - center).normalize_or_zero();
+                        DVec2::new(-r.y, r.x) * s
+                    };
+                    if (b - a).length() < 1e-9 && (a - center).length() < 1e-9 {
+                        continue;
+                    }
+                    (tan(a), tan(b))
+                }
+            };
+            if let Some(prev) = last {
+                out.push((i, prev.dot(t0).clamp(-1.0, 1.0).acos().to_degrees()));
+            }
+            last = Some(t1);
+        }
+        out
+    }
+
     /// Iterates `(from, move)`.
     pub fn segments(&self) -> impl Iterator<Item = (DVec3, &Move)> {
         let mut from = self.start;

@@ -11,6 +11,7 @@
 pub mod arcfit;
 pub mod area;
 pub mod index;
+pub mod medial;
 pub mod simplify;
 
 pub use area::Area;

@@ -34,6 +34,7 @@ use crate::strategy::{Params, Pass, PassKind};
 use crate::toolpath::{MoveKind, Toolpath};
 
 pub mod adaptive;
+pub mod medial;
 pub mod route;
 
 /// Builds the program from the passes of each level (`levels[i] = (z, passes)`), then the

@@ -39,6 +39,8 @@ pub enum StrategyKind {
     Offset,
     /// Direction-parallel zigzag.
     Zigzag,
+    /// Tangent-continuous circles along the medial axis (paper 2).
+    Medial,
 }
 
 impl StrategyKind {
@@ -48,6 +50,7 @@ impl StrategyKind {
             "adaptive" => Some(StrategyKind::Adaptive),
             "offset" | "contour" => Some(StrategyKind::Offset),
             "zigzag" | "raster" => Some(StrategyKind::Zigzag),
+            "medial" | "mat" => Some(StrategyKind::Medial),
             _ => None,
         }
     }
@@ -57,6 +60,7 @@ impl StrategyKind {
             StrategyKind::Adaptive => "adaptive",
             StrategyKind::Offset => "offset",
             StrategyKind::Zigzag => "zigzag",
+            StrategyKind::Medial => "medial",
         }
     }
 }
@@ -238,12 +242,13 @@ impl LayerGeom {
 /// The passes of `strategy` for one level (the same at every level of a 2.5D job).
 pub fn passes(job: &Job, geom: &LayerGeom, params: &Params) -> Result<Vec<Pass>> {
     let mut out = match params.strategy {
-        // adaptive passes are made while linking (they depend on the material left)
-        StrategyKind::Adaptive => Vec::new(),
+        // adaptive and medial programs are made while linking (the adaptive passes depend on
+        // the material left; the medial path is made of exact arcs)
+        StrategyKind::Adaptive | StrategyKind::Medial => Vec::new(),
         StrategyKind::Offset => offset::passes(geom, params),
         StrategyKind::Zigzag => zigzag::passes(geom, params),
     };
-    if params.strategy == StrategyKind::Adaptive {
+    if matches!(params.strategy, StrategyKind::Adaptive | StrategyKind::Medial) {
         return Ok(out);
     }
     let t = std::time::Instant::now();
