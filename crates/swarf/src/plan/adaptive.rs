@@ -168,13 +168,7 @@ pub fn link_adaptive(
     if std::env::var("SWARF_DEBUG").is_ok() {
         eprintln!("adaptive clean-up done at {:.3} s", t0.elapsed().as_secs_f64());
     }
-    for (i, (z, passes)) in finish.iter().enumerate() {
-        eng.l.tp.note(format!("finishing contour {} of {}: z {:.3}", i + 1, finish.len(), z));
-        eng.l.down_at = None;
-        for p in super::order(passes, eng.l.tp.end().truncate()) {
-            eng.l.pass(p, *z);
-        }
-    }
+    eng.l.finishing(finish);
     Ok(l.finish())
 }
 

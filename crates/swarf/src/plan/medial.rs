@@ -70,128 +70,114 @@ pub struct Run {
 /// The runs of every connected piece of the axis, each piece's first run starting at its
 /// largest circle.
 pub fn runs(axis: &Axis, step: f64, r: f64) -> Vec<Run> {
-    let step = Spacing { step, r };
-    let mut out = Vec::new();
-    let mut node_seen = vec![false; axis.nodes.len()];
-    let mut edge_seen = vec![false; axis.edges.len()];
+    let mut w = Walker {
+        axis,
+        step: Spacing { step, r },
+        node_seen: vec![false; axis.nodes.len()],
+        edge_seen: vec![false; axis.edges.len()],
+        out: Vec::new(),
+    };
     // pieces, largest circle first
     let mut roots: Vec<usize> = (0..axis.nodes.len()).collect();
     roots.sort_by(|a, b| axis.nodes[*b].r.total_cmp(&axis.nodes[*a].r));
     for root in roots {
-        if node_seen[root] || axis.nodes[root].r < RHO_MIN {
+        if w.node_seen[root] || axis.nodes[root].r < RHO_MIN {
             continue;
         }
-        node_seen[root] = true;
+        w.node_seen[root] = true;
         let n = &axis.nodes[root];
         let mut run = Run { circles: vec![Circle { c: n.p, rho: n.r }], from_hub: false };
-        walk(axis, root, step, &mut node_seen, &mut edge_seen, &mut run, &mut out);
-        if !run.circles.is_empty() {
-            out.push(run);
-        }
+        w.walk(root, &mut run);
+        w.out.push(run);
     }
-    out.retain(|r| !r.circles.is_empty());
-    out
+    w.out.retain(|r| !r.circles.is_empty());
+    w.out
 }
 
-/// Depth-first walk from `node` (whose circle ends `run`).
-fn walk(
-    axis: &Axis,
-    node: usize,
+/// The depth-first walk over the axis: what it has visited and the runs it has made.
+struct Walker<'a> {
+    axis: &'a Axis,
     step: Spacing,
-    node_seen: &mut [bool],
-    edge_seen: &mut [bool],
-    run: &mut Run,
-    out: &mut Vec<Run>,
-) {
-    let hub = Circle { c: axis.nodes[node].p, rho: axis.nodes[node].r };
-    let mut first = true;
-    let mut edges = axis.nodes[node].edges.clone();
-    // longest branches first (ties by index: deterministic)
-    edges.sort_by(|a, b| {
-        let la = axis.edges[*a].pts.len();
-        let lb = axis.edges[*b].pts.len();
-        lb.cmp(&la).then(a.cmp(b))
-    });
-    for e in edges {
-        if edge_seen[e] {
-            continue;
-        }
-        edge_seen[e] = true;
-        if !first {
-            out.push(std::mem::take(run));
-            *run = Run { circles: vec![hub], from_hub: true };
-        }
-        first = false;
-        let path = axis.edges[e].from(node);
-        place(hub, &path, step, &mut run.circles);
-        let other = axis.edges[e].other(node);
-        if !node_seen[other] {
-            node_seen[other] = true;
+    node_seen: Vec<bool>,
+    edge_seen: Vec<bool>,
+    out: Vec<Run>,
+}
+
+impl Walker<'_> {
+    /// True when `run` ends with the circle at node `n` (the walk can go on from it).
+    fn ends_at(&self, run: &Run, n: usize) -> bool {
+        run.circles.last().is_some_and(|c| (c.c - self.axis.nodes[n].p).length() < 1e-9)
+    }
+
+    /// Walks on from `node` (whose circle ends `run`).
+    fn walk(&mut self, node: usize, run: &mut Run) {
+        let axis = self.axis;
+        let hub = Circle { c: axis.nodes[node].p, rho: axis.nodes[node].r };
+        let mut first = true;
+        let mut edges = axis.nodes[node].edges.clone();
+        // longest branches first (ties by index: deterministic)
+        edges.sort_by(|a, b| axis.edges[*b].pts.len().cmp(&axis.edges[*a].pts.len()).then(a.cmp(b)));
+        for e in edges {
+            if self.edge_seen[e] {
+                continue;
+            }
+            self.edge_seen[e] = true;
+            if !first {
+                self.out.push(std::mem::take(run));
+                *run = Run { circles: vec![hub], from_hub: true };
+            }
+            first = false;
+            place(hub, &axis.edges[e].from(node), self.step, &mut run.circles);
+            let other = axis.edges[e].other(node);
+            if self.node_seen[other] {
+                continue;
+            }
+            self.node_seen[other] = true;
             // the branch goes on from the circle at the other node (placed last, when it is
             // large enough to cut)
-            if run.circles.last().is_some_and(|c| (c.c - axis.nodes[other].p).length() < 1e-9) {
-                walk(axis, other, step, node_seen, edge_seen, run, out);
+            if self.ends_at(run, other) {
+                self.walk(other, run);
             } else {
                 // a node too small to cut: what lies beyond starts afresh
-                out.push(std::mem::take(run));
-                *run = Run::default();
+                self.out.push(std::mem::take(run));
                 let n = &axis.nodes[other];
                 if n.r >= RHO_MIN {
                     run.circles.push(Circle { c: n.p, rho: n.r });
+                    self.walk(other, run);
+                } else {
+                    self.beyond_small(other);
                 }
-                walk_from_small(axis, other, step, node_seen, edge_seen, run, out);
             }
         }
     }
-}
 
-/// Continues a walk at a node whose circle is too small to cut: each branch beyond it starts
-/// a run of its own where its circles become large enough.
-fn walk_from_small(
-    axis: &Axis,
-    node: usize,
-    step: Spacing,
-    node_seen: &mut [bool],
-    edge_seen: &mut [bool],
-    run: &mut Run,
-    out: &mut Vec<Run>,
-) {
-    if !run.circles.is_empty() {
-        walk(axis, node, step, node_seen, edge_seen, run, out);
-        return;
-    }
-    let edges = axis.nodes[node].edges.clone();
-    for e in edges {
-        if edge_seen[e] {
-            continue;
-        }
-        edge_seen[e] = true;
-        let path = axis.edges[e].from(node);
-        // the first point of the branch large enough to cut starts it
-        let Some(k) = path.iter().position(|p| p.1 >= RHO_MIN) else {
+    /// Goes on past a node whose circle is too small to cut: each branch beyond it starts a
+    /// run of its own where its circles become large enough.
+    fn beyond_small(&mut self, node: usize) {
+        let axis = self.axis;
+        for e in axis.nodes[node].edges.clone() {
+            if self.edge_seen[e] {
+                continue;
+            }
+            self.edge_seen[e] = true;
+            let path = axis.edges[e].from(node);
             let other = axis.edges[e].other(node);
-            if !node_seen[other] {
-                node_seen[other] = true;
-                let mut r = Run::default();
-                walk_from_small(axis, other, step, node_seen, edge_seen, &mut r, out);
-                if !r.circles.is_empty() {
-                    out.push(r);
+            let fresh = !self.node_seen[other];
+            self.node_seen[other] = true;
+            // the first point of the branch large enough to cut starts it
+            let Some(k) = path.iter().position(|p| p.1 >= RHO_MIN) else {
+                if fresh {
+                    self.beyond_small(other);
                 }
+                continue;
+            };
+            let start = Circle { c: path[k].0, rho: path[k].1 };
+            let mut run = Run { circles: vec![start], from_hub: false };
+            place(start, &path[k..], self.step, &mut run.circles);
+            if fresh && self.ends_at(&run, other) {
+                self.walk(other, &mut run);
             }
-            continue;
-        };
-        let start = Circle { c: path[k].0, rho: path[k].1 };
-        let mut r = Run { circles: vec![start], from_hub: false };
-        place(start, &path[k..], step, &mut r.circles);
-        let other = axis.edges[e].other(node);
-        if !node_seen[other] {
-            node_seen[other] = true;
-            if r.circles.last().is_some_and(|c| (c.c - axis.nodes[other].p).length() < 1e-9) {
-                walk(axis, other, step, node_seen, edge_seen, &mut r, out);
-            }
-        }
-        if !r.circles.is_empty() {
-            out.push(r);
+            self.out.push(run);
         }
     }
 }
@@ -228,7 +214,7 @@ fn hausdorff(a: &Circle, b: &Circle) -> f64 {
 fn place(from: Circle, path: &[(DVec2, f64)], spacing: Spacing, out: &mut Vec<Circle>) {
     // a circle whose centre is within MIN_BRIDGE of the one before it takes its place (so
     // short a bridge, printed to a micrometre, would not be tangent)
-    let push = |out: &mut Vec<Circle>, c: Circle, _must: bool| match out.last_mut() {
+    let push = |out: &mut Vec<Circle>, c: Circle| match out.last_mut() {
         Some(q) if (q.c - c.c).length() < MIN_BRIDGE => *q = c,
         _ => out.push(c),
     };
@@ -252,7 +238,7 @@ fn place(from: Circle, path: &[(DVec2, f64)], spacing: Spacing, out: &mut Vec<Ci
             let c = at(p0, p1, b);
             cur = c;
             if c.rho >= RHO_MIN {
-                push(out, c, false);
+                push(out, c);
             }
         }
     }
@@ -260,7 +246,7 @@ fn place(from: Circle, path: &[(DVec2, f64)], spacing: Spacing, out: &mut Vec<Ci
         && r >= RHO_MIN
     {
         if out.last().is_none_or(|c| (c.c - p).length() > 1e-9) {
-            push(out, Circle { c: p, rho: r }, true);
+            push(out, Circle { c: p, rho: r });
         }
         return;
     }
@@ -276,7 +262,7 @@ fn place(from: Circle, path: &[(DVec2, f64)], spacing: Spacing, out: &mut Vec<Ci
     {
         let (p0, p1) = (path[k], path[k + 1]);
         let t = ((p0.1 - end_rho) / (p0.1 - p1.1).max(1e-12)).clamp(0.0, 1.0);
-        push(out, Circle { c: p0.0.lerp(p1.0, t), rho: end_rho }, true);
+        push(out, Circle { c: p0.0.lerp(p1.0, t), rho: end_rho });
     }
 }
 
@@ -370,13 +356,7 @@ pub fn link_medial(
             cut_run(&mut l, run, *z, geom.step);
         }
     }
-    for (i, (z, passes)) in finish.iter().enumerate() {
-        l.tp.note(format!("finishing contour {} of {}: z {:.3}", i + 1, finish.len(), z));
-        l.down_at = None;
-        for p in super::order(passes, l.tp.end().truncate()) {
-            l.pass(p, *z);
-        }
-    }
+    l.finishing(finish);
     Ok(l.finish())
 }
 

@@ -58,13 +58,7 @@ pub fn link(
             l.pass(p, *z);
         }
     }
-    for (i, (z, passes)) in finish.iter().enumerate() {
-        l.tp.note(format!("finishing contour {} of {}: z {:.3}", i + 1, finish.len(), z));
-        l.down_at = None;
-        for p in order(passes, l.tp.end().truncate()) {
-            l.pass(p, *z);
-        }
-    }
+    l.finishing(finish);
     Ok(l.finish())
 }
 
@@ -155,6 +149,17 @@ impl<'a> Linker<'a> {
             precut: false,
             clear_margin: 0.0,
         })
+    }
+
+    /// Cuts the finishing contours of each level (`finish[i] = (z, passes)`), after the roughing.
+    fn finishing(&mut self, finish: &[(f64, Vec<Pass>)]) {
+        for (i, (z, passes)) in finish.iter().enumerate() {
+            self.tp.note(format!("finishing contour {} of {}: z {:.3}", i + 1, finish.len(), z));
+            self.down_at = None;
+            for p in order(passes, self.tp.end().truncate()) {
+                self.pass(p, *z);
+            }
+        }
     }
 
     /// Retracts and hands over the program.
