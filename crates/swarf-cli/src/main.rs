@@ -92,7 +92,7 @@ struct PlacementOpts {
 #[derive(Args, Clone)]
 struct CommonOpts {
     /// Clearing strategy: adaptive (engagement held near the reference, paper 1), offset
-    /// (contour-parallel) or zigzag.
+    /// (contour-parallel), zigzag, or medial (C1 circles along the medial axis, paper 2).
     #[arg(long, value_enum, default_value = "adaptive")]
     strategy: StrategyArg,
     /// Tool diameter, mm (overrides the input).
@@ -142,13 +142,18 @@ struct CommonOpts {
     #[arg(long, value_name = "DEG", default_value_t = 20.0, allow_negative_numbers = true)]
     overshoot: f64,
     /// Adaptive: raise the feed where the engagement is low, by up to this factor (chip-thinning
-    /// compensation 1/sin θ, smoothed over a tool diameter; paper 1 §5). 1 = off.
+    /// compensation 1/sin θ, smoothed over a tool diameter; paper 1 §5). Medial: the feed of
+    /// the cut-back returns through cleared space (paper 2, conclusion). 1 = off.
     #[arg(long, value_name = "FACTOR", default_value_t = 1.0, allow_negative_numbers = true)]
     feed_boost: f64,
     /// Links through cleared space as feed moves (G1 at the cutting feed times the feed boost)
     /// instead of rapids at depth: for controls whose G0 is not a straight line.
     #[arg(long)]
     feed_links: bool,
+    /// Medial: follow every circle all the way round (paper 2 Fig. 1c) instead of returning to
+    /// the next circle on a cut-back turn (Fig. 2c, the default).
+    #[arg(long)]
+    full_circles: bool,
     /// Arc-fitting tolerance, mm.
     #[arg(long, value_name = "MM", default_value_t = 0.002, allow_negative_numbers = true)]
     arc_tolerance: f64,
@@ -371,6 +376,7 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
         overshoot_deg: o.overshoot,
         feed_boost: o.feed_boost,
         feed_links: o.feed_links,
+        medial_cut_back: !o.full_circles,
         arc_tol: o.arc_tolerance,
         clearance: o.clearance,
         ..Default::default()

@@ -15,18 +15,32 @@
 //! 2. **Circles along the axis**: from a circle (c₀, ρ₀) the next one is placed where the
 //!    Hausdorff distance between the two circles, |c₁ − c₀| + |ρ₁ − ρ₀|, reaches the stepover
 //!    (§2.1, requirement 2: adjacent shapes a bounded distance apart, "the Hausdorff distance
-//!    between two circles is trivial to compute"). Every vertex of the axis gets a circle.
+//!    between two circles is trivial to compute"). Every junction and end of the axis gets a
+//!    circle; the vertices where the axis merely bends (two Voronoi edges meeting, every few
+//!    tenths of a millimetre along a polygonised curve) are walked through.
 //! 3. **Bridges**: two circles run in the same direction have two outer bi-tangents (§2.2,
 //!    Fig. 3); the one on the side that keeps the direction is taken (on the right of the way
 //!    from one centre to the next for counter-clockwise circles — climb milling — on the left
 //!    for clockwise ones). Each circle is followed from where the bridge arrives at least until
-//!    it has swept the arc that lies outside the circle before it (the new material), then on
-//!    to where the next bridge leaves.
-//! 4. **Branches**: the axis is walked depth first from the largest circle; when a branch ends
+//!    it has swept the arc that lies outside the circle before it (the new material).
+//! 4. **Cut-back return** (§2.1, Fig. 2c: "cut and round the back half of the circular arc, in
+//!    each circle, making the tool return to its next cutting position faster"): the rest of
+//!    the circle cuts nothing (it lies inside the circle before), so the tool leaves it where
+//!    the new arc ends, on a circle of [`CUT_BACK`] times the radius tangent to it there, and
+//!    takes that circle's bi-tangent to the next one — a shorter way to the same place, and
+//!    tangent-continuous; at the feed times `--feed-boost` where the model says it cuts
+//!    nothing (the paper's other proposal: "make the tool move along these half back
+//!    portions much faster"). Where it would not be shorter, or would meet the next circle
+//!    past the start of its new arc, the tool goes round as before. `--full-circles` turns it
+//!    off.
+//! 5. **Branches**: the axis is walked depth first from the largest circle; when a branch ends
 //!    (in a corner, or where the walk meets a circle already cut round an island), the next
 //!    branch starts from its junction's circle, already cut: the tool links there through
 //!    cleared space (a rapid at depth when the way is clear, else over the material) and
 //!    continues from the point where that circle's bridge to the new branch leaves.
+//!
+//! The axis is that of [`region`]: the tool-centre region less what lies beyond half a tool
+//! radius outside the material, so that on an open side no circle is spent in the air.
 //!
 //! Circles smaller than [`RHO_MIN`] are not cut (the tip of a branch into a sharp corner).
 //! Every arc is at most a half turn (G2/G3 with distinct ends).
@@ -90,7 +104,9 @@ pub fn runs(axis: &Axis, step: f64, r: f64) -> Vec<Run> {
         w.walk(root, &mut run);
         w.out.push(run);
     }
-    w.out.retain(|r| !r.circles.is_empty());
+    // (a run that only goes back to a circle cut before has nothing to cut: the branch it
+    // stood for was too small for a circle)
+    w.out.retain(|r| !(r.circles.is_empty() || r.from_hub && r.circles.len() == 1));
     w.out
 }
 
@@ -107,6 +123,26 @@ impl Walker<'_> {
     /// True when `run` ends with the circle at node `n` (the walk can go on from it).
     fn ends_at(&self, run: &Run, n: usize) -> bool {
         run.circles.last().is_some_and(|c| (c.c - self.axis.nodes[n].p).length() < 1e-9)
+    }
+
+    /// The points of edge `e` walked from `node`, and on through the nodes where the axis
+    /// merely bends (two edges: a Voronoi vertex between two boundary pieces of the same
+    /// wall, every few tenths of a millimetre along a tessellated curve), so that circles
+    /// are spaced along the branch rather than put at each of those vertices; and the node
+    /// the chain ends at.
+    fn chain(&mut self, node: usize, e: usize) -> (Vec<(DVec2, f64)>, usize) {
+        let axis = self.axis;
+        let mut path = axis.edges[e].from(node);
+        let mut at = axis.edges[e].other(node);
+        while !self.node_seen[at] && axis.nodes[at].edges.len() == 2 && axis.nodes[at].r >= RHO_MIN {
+            let Some(&next) = axis.nodes[at].edges.iter().find(|&&f| !self.edge_seen[f]) else { break };
+            self.node_seen[at] = true;
+            self.edge_seen[next] = true;
+            let more = axis.edges[next].from(at);
+            path.extend_from_slice(&more[1..]);
+            at = axis.edges[next].other(at);
+        }
+        (path, at)
     }
 
     /// Walks on from `node` (whose circle ends `run`).
@@ -127,8 +163,8 @@ impl Walker<'_> {
                 *run = Run { circles: vec![hub], from_hub: true };
             }
             first = false;
-            place(hub, &axis.edges[e].from(node), self.step, &mut run.circles);
-            let other = axis.edges[e].other(node);
+            let (path, other) = self.chain(node, e);
+            place(hub, &path, self.step, &mut run.circles);
             if self.node_seen[other] {
                 continue;
             }
@@ -323,6 +359,15 @@ fn cover(k: &Circle, prev: Option<&Circle>, a_in: f64, s: f64) -> f64 {
     sweep(a_in, tc - s * beta, s)
 }
 
+/// The region whose medial axis carries the circles: where the tool centre may go, less the
+/// band beyond half a radius outside the material (where the tool is open to the air, at a
+/// stock edge, its centre need not go further than that to cut the edge, and circles in the
+/// rest of the band would cut nothing).
+pub fn region(regions: &Regions, geom: &LayerGeom) -> crate::geom::Area {
+    let open = regions.material.offset(0.5 * geom.r, crate::model::REGION_TOL);
+    geom.centres.intersection(&open)
+}
+
 /// Builds the program of a level job by the medial-axis strategy.
 pub fn link_medial(
     job: &Job,
@@ -333,7 +378,8 @@ pub fn link_medial(
     finish: &[(f64, Vec<Pass>)],
     sim_opts: &SimOptions,
 ) -> Result<Toolpath> {
-    let axis = medial_axis(&geom.centres, MIN_OBJECT_ANGLE).map_err(|e| Error::param("--strategy medial", e))?;
+    let axis =
+        medial_axis(&region(regions, geom), MIN_OBJECT_ANGLE).map_err(|e| Error::param("--strategy medial", e))?;
     let runs = runs(&axis, geom.step, geom.r);
     if std::env::var("SWARF_DEBUG").is_ok() {
         eprintln!("medial axis: {} nodes, {} edges; {} runs", axis.nodes.len(), axis.edges.len(), runs.len());
@@ -363,14 +409,71 @@ pub fn link_medial(
 /// Cuts the arc of `k` from angle `a` through `total` (direction `s`) in pieces of at most a
 /// half turn.
 fn arc(l: &mut Linker, k: &Circle, a: f64, total: f64, s: f64, z: f64) {
+    let feed = l.feed;
+    arc_at(l, k, a, total, s, z, feed);
+}
+
+/// [`arc`] at a given feed.
+fn arc_at(l: &mut Linker, k: &Circle, a: f64, total: f64, s: f64, z: f64, feed: f64) {
     if total < 1e-9 {
         return;
     }
     let pieces = (total / PI).ceil().max(1.0) as usize;
     for j in 1..=pieces {
         let t = a + s * total * j as f64 / pieces as f64;
-        l.push_arc(MoveKind::Cut, on(k, t).extend(z), k.c, s > 0.0, l.feed);
+        l.push_arc(MoveKind::Cut, on(k, t).extend(z), k.c, s > 0.0, feed);
     }
+}
+
+/// The radius of a cut-back turn as a fraction of its circle's.
+pub const CUT_BACK: f64 = 0.3;
+
+/// The cut-back return from circle `k` (its new arc ending at angle `a_e`) to the next circle
+/// `nk` (paper 2 §2.1, Fig. 2c: "cut and round the back half of the circular arc ... making
+/// the tool return to its next cutting position faster"): a circle `q` of radius
+/// [`CUT_BACK`]·ρ inside `k`, tangent to it at `a_e` (so the turn onto it is smooth), and the
+/// outer bi-tangent from `q` to `nk` on the side that keeps the direction. Returns `q` and the
+/// angle at which the bridge leaves `q` and meets `nk` (the bi-tangent's common normal).
+///
+/// Nothing is lost: the back half of `k` lies inside the circle before it (that is what
+/// [`cover`] leaves out), so the tool disk along it stays in the disk that circle's turn
+/// cleared, and `q` lies inside `k`. `None` when the turn would not be shorter than the way
+/// round `k`, or when the bridge would meet `nk` past the start of its new arc (material the
+/// tool would then skip).
+fn cut_back(k: &Circle, a_e: f64, nk: &Circle, s: f64) -> Option<(Circle, f64)> {
+    let rho = (CUT_BACK * k.rho).max(RHO_MIN);
+    if rho >= 0.9 * k.rho {
+        return None;
+    }
+    let e = DVec2::new(a_e.cos(), a_e.sin());
+    let q = Circle { c: k.c + e * (k.rho - rho), rho };
+    let a2 = ang(bridge_normal(&q, nk, s)?);
+    let a_out = ang(bridge_normal(k, nk, s)?);
+    // the new arc of `nk` (outside `k`) runs from `ns` to `ne` in direction s; the bridge must
+    // meet `nk` outside it
+    let d = (k.c - nk.c).length();
+    if d < nk.rho + k.rho && d + k.rho > nk.rho && d + nk.rho > k.rho {
+        let tc = ang(k.c - nk.c);
+        let beta = ((nk.rho * nk.rho + d * d - k.rho * k.rho) / (2.0 * nk.rho * d)).clamp(-1.0, 1.0).acos();
+        let (ns, ne) = (tc + s * beta, tc - s * beta);
+        if sweep(a2, ns, s) > sweep(a2, ne, s) {
+            return None;
+        }
+    } else {
+        return None;
+    }
+    // lengths to the same point of `nk` (where the usual bridge lands, or where this one does,
+    // whichever comes later)
+    let usual_bridge = (on(nk, a_out) - on(k, a_out)).length();
+    let new_bridge = (on(nk, a2) - on(&q, a2)).length();
+    let (wait_usual, wait_new) = if sweep(a2, a_out, s) < PI {
+        (0.0, nk.rho * sweep(a2, a_out, s))
+    } else {
+        (nk.rho * sweep(a_out, a2, s), 0.0)
+    };
+    let usual = k.rho * sweep(a_e, a_out, s) + usual_bridge + wait_usual;
+    let short = q.rho * sweep(a_e, a2, s) + new_bridge + wait_new;
+    (short < usual - 1e-6).then_some((q, a2))
 }
 
 /// Cuts one run at level `z`.
@@ -411,8 +514,28 @@ fn cut_run(l: &mut Linker, run: &Run, z: f64, step: f64) {
         let normal = next.and_then(|nk| bridge_normal(&k, nk, s));
         match (next, normal) {
             (Some(nk), Some(nrm)) => {
+                let a_e = a_in + s * need;
+                if l.params.medial_cut_back
+                    && let Some((q, a2)) = cut_back(&k, a_e, nk, s)
+                    && l.keep_safe(on(&q, a2), on(nk, a2), z)
+                {
+                    // the new arc, then the tighter turn and the bridge from it, both in the
+                    // disk the circles before have cleared (at the boosted feed when the
+                    // model says they cut nothing)
+                    arc(l, &k, a_in, need, s, z);
+                    let turn = Path::Line { a: q.c.extend(z), b: q.c.extend(z) };
+                    let bridge = Path::Line { a: on(&q, a2).extend(z), b: on(nk, a2).extend(z) };
+                    let air = l.sim.is_clear(&turn, q.rho + 0.05) && l.sim.is_clear(&bridge, 0.05);
+                    let feed = if air { l.feed * l.params.feed_boost } else { l.feed };
+                    arc_at(l, &q, a_e, sweep(a_e, a2, s), s, z, feed);
+                    l.push_line(MoveKind::Cut, on(nk, a2).extend(z), feed);
+                    a_in = a2;
+                    prev = Some(k);
+                    i = j;
+                    continue;
+                }
                 let a_out = ang(nrm);
-                let total = need + sweep(a_in + s * need, a_out, s);
+                let total = need + sweep(a_e, a_out, s);
                 arc(l, &k, a_in, total, s, z);
                 let to = on(nk, a_out);
                 if l.keep_safe(on(&k, a_out), to, z) {

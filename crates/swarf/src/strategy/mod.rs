@@ -128,6 +128,9 @@ pub struct Params {
     /// passes left as the planner's raster sees it (a sliver thinner than a cell along a wall
     /// escapes it; z-level jobs stack such slivers into walls a whole depth tall).
     pub full_wall_contour: bool,
+    /// Medial: return from each circle's new arc to the next circle on a smaller, "cut back"
+    /// turn (paper 2 §2.1, Fig. 2c) instead of the circle's back half, which cuts nothing.
+    pub medial_cut_back: bool,
 }
 
 impl Default for Params {
@@ -152,6 +155,7 @@ impl Default for Params {
             feed_links: false,
             corner_fillets: true,
             full_wall_contour: false,
+            medial_cut_back: true,
         }
     }
 }
