@@ -10,6 +10,7 @@
 
 pub mod arcfit;
 pub mod area;
+pub mod biarc;
 pub mod index;
 pub mod medial;
 pub mod simplify;
