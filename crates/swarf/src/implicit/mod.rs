@@ -16,6 +16,7 @@
 //!   one turn along the boundary level.
 
 pub mod draw;
+pub mod oscillator;
 pub mod region;
 pub mod rfunc;
 pub mod shape;
