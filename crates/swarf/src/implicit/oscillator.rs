@@ -39,7 +39,9 @@
 //! `f` by `Δc ≈ ζ F(c)` with the flux `F(c) = ∮_{f=c} |∇f| ds`, and the gap to the previous turn at
 //! a point is `Δc / |∇f|`. Taking `ζ(c) = s · w · g_min(c) / F(c)` (`g_min` the smallest `|∇f|` on
 //! the level, `s < 1` a safety factor) bounds every gap by `s · w`. On a disk this is `ζ = w / 2πr`
-//! and the spiral is Archimedean with spacing exactly `s·w`. `F` and `g_min` are tabulated once
+//! and the spiral is Archimedean with spacing exactly `s·w`. The estimate is linear and the
+//! table conservative, so [`spiral`] measures the result ([`max_turn_spacing`]) and rescales ζ
+//! (at most five runs), keeping the widest spiral whose measured spacing is within `w`. `F` and `g_min` are tabulated once
 //! per spiral from the level sets of a grid (marching squares, [`super::draw::Grid`]); between
 //! table levels the smaller ζ of the two neighbours is used. ζ is held constant through each
 //! integration step and updated between steps, which the error control never sees.
@@ -261,24 +263,33 @@ fn dp_step(rhs: &mut Rhs, y: DVec2, k1: DVec2, h: f64, phase: Phase) -> Result<S
 /// must be bounded ([`Field::bounds`]). Errors (typed, never a hang): an unbounded field, bad
 /// options, `f(start) ≤ f_end`, a vanishing gradient, a stalled or endless spiral.
 pub fn spiral(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<Spiral> {
-    let mut s = spiral_once(field, start, opts)?;
-    // the per-level ζ rests on a linear estimate of the gap; where the levels bend (rounded
-    // corners, tongues into narrow parts) the real gap can be larger: shrink the aim and redo
-    if let Damping::Stepover { w, safety, zeta_min, zeta_max } = opts.damping {
-        let mut safety = safety;
-        for _ in 0..4 {
-            if s.max_spacing <= w {
-                break;
-            }
-            safety *= 0.97 * w / s.max_spacing;
-            let o = SpiralOptions { damping: Damping::Stepover { w, safety, zeta_min, zeta_max }, ..*opts };
-            s = spiral_once(field, start, &o)?;
+    let Damping::Stepover { w, .. } = opts.damping else {
+        return spiral_once(field, start, opts, 1.0);
+    };
+    // the per-level ζ rests on a linear estimate of the gap (and a conservative table): where
+    // levels bend (rounded corners, tongues into narrow parts) the real gap can be larger, and
+    // elsewhere it is often smaller. Measure and rescale ζ, keeping the widest spiral within w.
+    let mut gain = 1.0;
+    let mut best: Option<Spiral> = None;
+    for _ in 0..5 {
+        let s = spiral_once(field, start, opts, gain)?;
+        let m = s.max_spacing;
+        let ok = m <= w;
+        if ok && best.as_ref().is_none_or(|b| m > b.max_spacing) {
+            best = Some(s);
         }
+        if ok && m >= 0.85 * w {
+            break;
+        }
+        gain *= 0.95 * w / m.max(1e-3 * w);
     }
-    Ok(s)
+    match best {
+        Some(s) => Ok(s),
+        None => spiral_once(field, start, opts, gain),
+    }
 }
 
-fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<Spiral> {
+fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64) -> Result<Spiral> {
     let (lo, hi) = field.bounds().ok_or_else(|| Error::param("spiral", "the shape is unbounded"))?;
     let size = (hi - lo).length();
     if !(size > 0.0) || !size.is_finite() {
@@ -317,7 +328,7 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<
     let h_min = size * 1e-12;
     let table = match opts.damping {
         Damping::Stepover { w, safety, zeta_min, zeta_max } => {
-            Some(ZetaTable::new(field, lo, hi, opts.f_end, f0, safety * w, zeta_min, zeta_max))
+            Some(ZetaTable::new(field, lo, hi, opts.f_end, f0, gain * safety * w, zeta_min, zeta_max))
         }
         Damping::Constant(_) => None,
     };
@@ -326,8 +337,7 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<
         (None, Damping::Constant(z)) => z,
         (None, _) => unreachable!("a stepover always has a table"),
     };
-    let gain = 10.0 / stepover.unwrap_or(size / 20.0);
-    let track = Phase::Track { level: opts.f_end, gain };
+    let track = Phase::Track { level: opts.f_end, gain: 10.0 / stepover.unwrap_or(size / 20.0) };
     let sense = if opts.turn == Turn::Ccw { 1.0 } else { -1.0 };
     let mut rhs = Rhs { field, sense, evals: 0 };
 
@@ -352,7 +362,16 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<
     loop {
         steps += 1;
         if steps > opts.max_steps {
-            return Err(Error::param("spiral", format!("no end after {} steps", opts.max_steps)));
+            return Err(Error::param(
+                "spiral",
+                format!(
+                    "no end after {} steps (at ({:.6}, {:.6}), f = {fy}, {})",
+                    opts.max_steps,
+                    y.x,
+                    y.y,
+                    if tracking.is_some() { "tracking the final level" } else { "growing" }
+                ),
+            ));
         }
         if h < h_min {
             return Err(Error::param("spiral", format!("the step fell below {h_min:e} at ({:.6}, {:.6})", y.x, y.y)));
@@ -420,6 +439,16 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<
                 thetas.push(theta + turn * frac);
                 length += h * frac;
                 break;
+            }
+            if theta < theta0 - std::f64::consts::PI {
+                return Err(Error::param(
+                    "spiral",
+                    format!(
+                        "the spiral met the level f = {} around an island (a hole of the region) at ({:.3}, {:.3}) \
+                         before the outer boundary: it covers simply connected regions only",
+                        opts.f_end, p0.x, p0.y
+                    ),
+                ));
             }
             if theta > theta0 + 3.0 * std::f64::consts::TAU {
                 return Err(Error::param("spiral", format!("the level f = {} does not close", opts.f_end)));
@@ -658,6 +687,8 @@ mod tests {
         };
         let s = check_region(&sq, &|p| p.x.abs() < 10.0 && p.y.abs() < 10.0, 1.5, 0.3);
         assert!(s.turns > 5.0 && s.turns < 40.0, "{}", s.turns);
+        // and not needlessly dense: the rescaling brings the widest gap close to the stepover
+        assert!(s.max_spacing >= 0.8 * 1.5, "spacing {}", s.max_spacing);
     }
 
     #[test]
