@@ -30,6 +30,9 @@ enum Cmd {
     /// job (paper 3): one program per tool of that sequence, a JSON report of every sequence
     /// costed, and a picture of the stock after each tool.
     Plan(PlanArgs),
+    /// Draw an implicit shape file (paper 4: R-function shapes in JSON): its zero set, a few
+    /// level sets, and optionally the oscillator spiral from its maximum.
+    Shape(ShapeArgs),
     /// Run the built-in example (a pocket with two islands) and write everything into a folder.
     Demo {
         /// Output folder.
@@ -250,6 +253,25 @@ struct PlanArgs {
     quiet: bool,
 }
 
+#[derive(Args)]
+struct ShapeArgs {
+    /// The shape file (JSON).
+    input: PathBuf,
+    /// Output picture (.svg, or .png).
+    #[arg(short, long, default_value = "shape.svg")]
+    output: PathBuf,
+    /// Level sets drawn between 0 and the maximum.
+    #[arg(long, default_value_t = 6)]
+    levels: usize,
+    /// Also draw the spiral with this stepover (same unit as the file), ending on the level a
+    /// tenth of the stepover inside.
+    #[arg(long)]
+    spiral: Option<f64>,
+    /// Print nothing.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
 /// An error that is the user's fault (exit 2) or not (exit 1).
 struct Failure {
     user: bool,
@@ -287,6 +309,7 @@ fn main() -> ExitCode {
     let res = match cli.cmd {
         Cmd::Rough(a) => rough(a),
         Cmd::Plan(a) => plan(a),
+        Cmd::Shape(a) => shape(a),
         Cmd::Demo { out_dir, opts } => demo(&out_dir, &opts),
     };
     match res {
@@ -792,6 +815,52 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
 }
 
 /// The cheapest sequences as paper 3's Table 2: diameters, time and cost.
+fn shape(a: ShapeArgs) -> Result<(), Failure> {
+    use swarf::implicit::{Field, draw, oscillator, shape};
+    let s = shape::Shape::load(&a.input)?;
+    let Some((lo, hi)) = s.bounds() else {
+        return Err(swarf::Error::input(&a.input, "shape", "the shape is unbounded: intersect it with a box").into());
+    };
+    let pad = (hi - lo) * 0.05;
+    let (lo, hi) = (lo - pad, hi + pad);
+    let mut title = a.input.file_name().and_then(|n| n.to_str()).unwrap_or("shape").to_string();
+    let path = match a.spiral {
+        None => None,
+        Some(w) => {
+            let (start, _) = shape::maximum(&s, lo, hi)
+                .ok_or_else(|| swarf::Error::input(&a.input, "shape", "the shape is empty (f is nowhere positive)"))?;
+            // end a tenth of the stepover inside: the zero set of an R-function shape has corners
+            let opts = oscillator::SpiralOptions {
+                damping: oscillator::Damping::stepover(w),
+                f_end: 0.1 * w,
+                ..Default::default()
+            };
+            let sp = oscillator::spiral(&s, start, &opts)?;
+            title =
+                format!("{title}: spiral, {:.1} turns, largest spacing {:.3} (stepover {w})", sp.turns, sp.max_spacing);
+            if !a.quiet {
+                println!(
+                    "{:.1} turns, length {:.1}, largest spacing between turns {:.3}",
+                    sp.turns, sp.length, sp.max_spacing
+                );
+            }
+            Some(sp.polyline())
+        }
+    };
+    let d = draw::Drawing { title, levels: a.levels, resolution: 300, path: path.as_deref() };
+    let text = draw::svg(&s, lo, hi, &d);
+    let bytes = if a.output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+        swarf::plot::png(&text)?
+    } else {
+        text.into_bytes()
+    };
+    std::fs::write(&a.output, bytes).map_err(|source| swarf::Error::Io { path: a.output.clone(), source })?;
+    if !a.quiet {
+        println!("wrote {}", a.output.display());
+    }
+    Ok(())
+}
+
 fn plan_table(sp: &swarf::toolseq::SeqPlan, rows: usize) -> String {
     let mut out = format!(
         "{:<36} {:>10} {:>12} {:>11} {:>11}\n",

@@ -15,6 +15,7 @@
 //! - [`io`]: the case format (JSON) and drawings (DXF, SVG, through `swarf-import`) into a
 //!   [`model::Job`];
 //! - [`geom`]: areas with holes, robust booleans and offsets, Douglas–Peucker, arc fitting;
+//! - [`implicit`]: R-function shapes and oscillator spirals over their level sets (paper 4);
 //! - [`strategy`]: zigzag and contour-parallel offset clearing (plus clean-up);
 //! - [`plan`]: entries (helix, ramp, plunge as the last resort), keep-down links, retracts;
 //! - [`toolpath`]: the move list everything downstream reads;
@@ -32,6 +33,7 @@
 
 pub mod error;
 pub mod geom;
+pub mod implicit;
 pub mod io;
 pub mod mesh;
 pub mod model;
