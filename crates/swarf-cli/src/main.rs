@@ -50,6 +50,8 @@ enum StrategyArg {
     Zigzag,
     /// C1 circles along the medial axis, joined by bi-tangent lines (paper 2)
     Medial,
+    /// One oscillator spiral from the inside out to the walls (paper 4)
+    Spiral,
 }
 
 #[derive(Copy, Clone, PartialEq, Eq, ValueEnum)]
@@ -157,6 +159,17 @@ struct CommonOpts {
     /// the next circle on a cut-back turn (Fig. 2c, the default).
     #[arg(long)]
     full_circles: bool,
+    /// Spiral: a constant damping ζ (paper 4 eq. 6; the spiral grows by e^(2πζ) per turn on a
+    /// disk) instead of ζ chosen per level to keep the stepover and the engagement.
+    #[arg(long, value_name = "ZETA", allow_negative_numbers = true, conflicts_with = "optimise")]
+    zeta: Option<f64>,
+    /// Spiral: start at this point instead of the maximum of the pocket's implicit function.
+    #[arg(long, value_name = "X,Y", allow_hyphen_values = true, conflicts_with = "optimise")]
+    spiral_start: Option<String>,
+    /// Spiral: choose ζ and the start point by simulating candidates and keeping the fastest
+    /// that clears the pocket within the engagement bound (paper 4 §4).
+    #[arg(long)]
+    optimise: bool,
     /// Arc-fitting tolerance, mm.
     #[arg(long, value_name = "MM", default_value_t = 0.002, allow_negative_numbers = true)]
     arc_tolerance: f64,
@@ -379,6 +392,17 @@ fn placement(o: &PlacementOpts) -> Result<Overrides, Failure> {
     Ok(ov)
 }
 
+/// Parses `X,Y` (for `--spiral-start`).
+fn pair(t: &str) -> Result<swarf::geom::DVec2, Failure> {
+    let v: Vec<f64> = t.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| {
+        swarf::Error::param("--spiral-start", format!("{t:?}: expected two numbers X,Y (mm)"))
+    })?;
+    match v[..] {
+        [x, y] if x.is_finite() && y.is_finite() => Ok(swarf::geom::DVec2::new(x, y)),
+        _ => Err(swarf::Error::param("--spiral-start", format!("{t:?}: expected two numbers X,Y (mm)")).into()),
+    }
+}
+
 fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> {
     let params = Params {
         strategy: match o.strategy {
@@ -386,6 +410,7 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
             StrategyArg::Offset => StrategyKind::Offset,
             StrategyArg::Zigzag => StrategyKind::Zigzag,
             StrategyArg::Medial => StrategyKind::Medial,
+            StrategyArg::Spiral => StrategyKind::Spiral,
         },
         climb: !o.conventional,
         offset_order: match o.order {
@@ -400,10 +425,21 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
         feed_boost: o.feed_boost,
         feed_links: o.feed_links,
         medial_cut_back: !o.full_circles,
+        spiral_zeta: o.zeta,
+        spiral_start: match &o.spiral_start {
+            Some(t) => Some(pair(t)?),
+            None => None,
+        },
+        spiral_optimise: o.optimise,
         arc_tol: o.arc_tolerance,
         clearance: o.clearance,
         ..Default::default()
     };
+    if let Some(z) = o.zeta
+        && !(z.is_finite() && z > 0.0 && z <= 1.0)
+    {
+        return Err(swarf::Error::param("--zeta", format!("{z}: ζ must be in (0, 1]")).into());
+    }
     if let Some(r) = o.res
         && !(r.is_finite() && r > 0.0)
     {

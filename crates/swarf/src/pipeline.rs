@@ -227,7 +227,10 @@ pub fn plan(job: &Job, opts: &RoughOptions) -> Result<Option<Planned>> {
         eprintln!("passes {:.3} s ({} passes)", t0.elapsed().as_secs_f64(), passes.len());
     }
     if passes.is_empty()
-        && !matches!(opts.params.strategy, strategy::StrategyKind::Adaptive | strategy::StrategyKind::Medial)
+        && !matches!(
+            opts.params.strategy,
+            strategy::StrategyKind::Adaptive | strategy::StrategyKind::Medial | strategy::StrategyKind::Spiral
+        )
     {
         return Ok(None);
     }
@@ -243,6 +246,19 @@ pub fn plan(job: &Job, opts: &RoughOptions) -> Result<Option<Planned>> {
         plan::adaptive::link_adaptive(job, &regions, &geom, &opts.params, &zs, &finish, &opts.sim)?
     } else if opts.params.strategy == strategy::StrategyKind::Medial {
         plan::medial::link_medial(job, &regions, &geom, &opts.params, &zs, &finish, &opts.sim)?
+    } else if opts.params.strategy == strategy::StrategyKind::Spiral {
+        let choice = if opts.params.spiral_optimise {
+            let (best, trials) = optimise_spiral(job, &regions, &geom, opts, &zs)?;
+            if debug {
+                for t in &trials {
+                    eprintln!("spiral trial {t:?}");
+                }
+            }
+            best
+        } else {
+            plan::spiral::SpiralChoice { zeta: opts.params.spiral_zeta, start: opts.params.spiral_start }
+        };
+        plan::spiral::link_spiral(job, &regions, &geom, &opts.params, &zs, &finish, &opts.sim, &choice)?
     } else {
         plan::link(job, &regions, &opts.params, &levels, &finish, &opts.sim)?
     };
@@ -256,4 +272,54 @@ pub fn example_job() -> Job {
         Ok(j) => j,
         Err(e) => unreachable!("the built-in example is valid: {e}"),
     }
+}
+
+/// The loop of paper 4 §4 (Figs. 8–9): plans the spiral of every candidate of
+/// [`plan::spiral::candidates`] (ζ per level or constant, start points), simulates each on the
+/// raster model, and returns the fastest that clears the pocket (rest ≤ 0.5 % of the reachable
+/// area, no gouge) within the engagement bound (p99 outside the entry ≤ the reference + 10°),
+/// with every trial. When none does, the one that misses by least (rest first).
+pub fn optimise_spiral(
+    job: &Job,
+    regions: &crate::model::Regions,
+    geom: &LayerGeom,
+    opts: &RoughOptions,
+    zs: &[f64],
+) -> Result<(plan::spiral::SpiralChoice, Vec<plan::spiral::Trial>)> {
+    let bound = job.width.engagement_deg() + 10.0;
+    let mut trials = Vec::new();
+    for choice in plan::spiral::candidates(job, regions, geom, &opts.params)? {
+        let mut tp = match plan::spiral::link_spiral(job, regions, geom, &opts.params, zs, &[], &opts.sim, &choice) {
+            Ok(tp) => tp,
+            Err(_) => {
+                trials.push(plan::spiral::Trial { choice, time_min: None, rest: 1.0, p99_deg: 180.0, feasible: false });
+                continue;
+            }
+        };
+        tp.quantize(post::COORD_STEP, post::CENTER_STEP);
+        let mut sim = RasterSim::new(job, regions, &opts.sim)?;
+        let rp = sim.replay(&tp, &mut |_| {});
+        let mut rep = Report::default();
+        report::fill(&mut rep, &tp, &rp, &sim.rest(), job.rapid_rate);
+        let feasible = rep.rest_fraction <= 0.005 && rep.gouges == 0 && rep.engagement_deg.p99 <= bound;
+        trials.push(plan::spiral::Trial {
+            choice,
+            time_min: Some(rep.time_min),
+            rest: rep.rest_fraction,
+            p99_deg: rep.engagement_deg.p99,
+            feasible,
+        });
+    }
+    let best = trials
+        .iter()
+        .filter(|t| t.feasible)
+        .min_by(|a, b| a.time_min.unwrap_or(f64::MAX).total_cmp(&b.time_min.unwrap_or(f64::MAX)))
+        .or_else(|| {
+            trials.iter().filter(|t| t.time_min.is_some()).min_by(|a, b| {
+                a.rest.total_cmp(&b.rest).then((a.p99_deg - bound).max(0.0).total_cmp(&(b.p99_deg - bound).max(0.0)))
+            })
+        })
+        .map(|t| t.choice)
+        .ok_or_else(|| Error::param("--strategy spiral", "no spiral could be made from any start or ζ"))?;
+    Ok((best, trials))
 }

@@ -39,7 +39,9 @@
 //! `f` by `Δc ≈ ζ F(c)` with the flux `F(c) = ∮_{f=c} |∇f| ds`, and the gap to the previous turn at
 //! a point is `Δc / |∇f|`. Taking `ζ(c) = s · w · g_min(c) / F(c)` (`g_min` the smallest `|∇f|` on
 //! the level, `s < 1` a safety factor) bounds every gap by `s · w`. On a disk this is `ζ = w / 2πr`
-//! and the spiral is Archimedean with spacing exactly `s·w`. The estimate is linear and the
+//! and the spiral is Archimedean with spacing exactly `s·w`. With an engagement limit
+//! ([`SpiralOptions::engagement`]) the gap allowed at each point of a level is also held to
+//! [`engagement_spacing`] at the level's curvature there, so `ζ(c) = s · min(w_here |∇f|) / F(c)`. The estimate is linear and the
 //! table conservative, so [`spiral`] measures the result ([`max_turn_spacing`]) and rescales ζ
 //! (at most five runs), keeping the widest spiral whose measured spacing is within `w`. `F` and `g_min` are tabulated once
 //! per spiral from the level sets of a grid (marching squares, [`super::draw::Grid`]); between
@@ -127,6 +129,43 @@ pub struct SpiralOptions {
     pub max_turns: usize,
     /// Most steps before giving up.
     pub max_steps: usize,
+    /// With a stepover, also hold the gaps to what keeps the engagement of a flat end mill
+    /// within an angle where the turns curve tightly.
+    pub engagement: Option<EngagementLimit>,
+    /// With a stepover: the largest measured gap [`spiral`] accepts before it rescales ζ down
+    /// (default: the stepover). A roughing spiral may accept more where levels round a corner,
+    /// since a tool of radius R still clears between turns up to 2R apart.
+    pub accept_gap: Option<f64>,
+}
+
+/// The engagement a stepover spiral keeps to (see [`engagement_spacing`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EngagementLimit {
+    /// Tool radius.
+    pub r: f64,
+    /// Largest engagement, radians.
+    pub theta: f64,
+    /// The gap is never held below this fraction of the stepover: where a level turns a corner
+    /// tighter than that allows (the levels near a polygon's corner), a short stretch of
+    /// higher engagement is taken instead of slowing every turn of the spiral down.
+    pub floor: f64,
+}
+
+/// The largest distance between turns that keeps the engagement of a tool of radius `r`
+/// within `theta` where the turn curves with radius `rho` round the cleared side.
+///
+/// The tool centre runs on a curve of radius ρ; the turn before, `w` inside, cleared a disk of
+/// radius ρ − w + R round the same centre. The tool circle's point at angle ψ from the outward
+/// normal is at distance √(ρ² + R² + 2ρR cos ψ) from the centre, so it is in material for
+/// ψ < ψ₀ with cos ψ₀ = ((ρ − w + R)² − ρ² − R²) / 2ρR, and the engagement (the front half's
+/// share, as for a straight cut, where it is acos(1 − w/R)) is ψ₀. Solving ψ₀ = θ for w:
+/// w = ρ + R − √(ρ² + R² + 2ρR cos θ). It tends to the straight cut's R(1 − cos θ) as ρ grows
+/// and to nothing as ρ shrinks (a small turn engages the tool as a slot would).
+pub fn engagement_spacing(rho: f64, r: f64, theta: f64) -> f64 {
+    if !(rho > 0.0) || !rho.is_finite() {
+        return r * (1.0 - theta.cos());
+    }
+    (rho + r - (rho * rho + r * r + 2.0 * rho * r * theta.cos()).sqrt()).max(0.0)
 }
 
 impl Default for SpiralOptions {
@@ -141,6 +180,8 @@ impl Default for SpiralOptions {
             start_offset: 0.0,
             max_turns: 10_000,
             max_steps: 2_000_000,
+            engagement: None,
+            accept_gap: None,
         }
     }
 }
@@ -274,11 +315,16 @@ pub fn spiral(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<S
     for _ in 0..5 {
         let s = spiral_once(field, start, opts, gain)?;
         let m = s.max_spacing;
-        let ok = m <= w;
+        if std::env::var("SWARF_DEBUG").is_ok() {
+            eprintln!("spiral gain {gain:.4}: {:.1} turns, length {:.1}, max spacing {m:.4} (w {w})", s.turns, s.length);
+        }
+        let ok = m <= opts.accept_gap.unwrap_or(w);
         if ok && best.as_ref().is_none_or(|b| m > b.max_spacing) {
             best = Some(s);
         }
-        if ok && m >= 0.85 * w {
+        // (with an engagement limit the gaps are meant to be below w where turns are tight:
+        // widening the spiral to reach w would undo it)
+        if ok && (m >= 0.85 * w || opts.engagement.is_some()) {
             break;
         }
         gain *= 0.95 * w / m.max(1e-3 * w);
@@ -328,7 +374,7 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64)
     let h_min = size * 1e-12;
     let table = match opts.damping {
         Damping::Stepover { w, safety, zeta_min, zeta_max } => {
-            Some(ZetaTable::new(field, lo, hi, opts.f_end, f0, gain * safety * w, zeta_min, zeta_max))
+            Some(ZetaTable::new(field, lo, hi, opts.f_end, f0, gain * safety * w, zeta_min, zeta_max, opts.engagement))
         }
         Damping::Constant(_) => None,
     };
@@ -551,10 +597,39 @@ struct ZetaTable {
 }
 
 impl ZetaTable {
+    /// With `eng` (tool radius, angle), the gap allowed at each point is also held to
+    /// [`engagement_spacing`] at the level's radius of curvature there, 1/κ with
+    /// κ = div(−∇f/|∇f|) by central differences.
     #[allow(clippy::too_many_arguments)]
-    fn new(field: &dyn Field, lo: DVec2, hi: DVec2, f_end: f64, f0: f64, w: f64, zmin: f64, zmax: f64) -> ZetaTable {
+    fn new(
+        field: &dyn Field,
+        lo: DVec2,
+        hi: DVec2,
+        f_end: f64,
+        f0: f64,
+        w: f64,
+        zmin: f64,
+        zmax: f64,
+        eng: Option<EngagementLimit>,
+    ) -> ZetaTable {
         let pad = (hi - lo) * 0.02;
         let grid = Grid::sample(field, lo - pad, hi + pad, 256);
+        let h = 1e-4 * (hi - lo).length();
+        let normal = |p: DVec2| -field.eval(p).g.normalize_or_zero();
+        let allowed = |p: DVec2, g: f64| {
+            let w_here = match eng {
+                Some(EngagementLimit { r, theta, floor }) => {
+                    let kappa = ((normal(p + DVec2::X * h) - normal(p - DVec2::X * h)).x
+                        + (normal(p + DVec2::Y * h) - normal(p - DVec2::Y * h)).y)
+                        / (2.0 * h);
+                    // (a level bending the other way engages the tool less than a straight cut)
+                    let rho = if kappa > 1e-12 { 1.0 / kappa } else { f64::INFINITY };
+                    w.min(engagement_spacing(rho, r, theta).max(floor * w))
+                }
+                None => w,
+            };
+            w_here * g
+        };
         let n = 64;
         let mut rows = Vec::with_capacity(n);
         for k in 0..n {
@@ -565,12 +640,12 @@ impl ZetaTable {
                 continue;
             }
             let mut flux = 0.0;
-            let mut gmin = f64::INFINITY;
+            let mut wg = f64::INFINITY;
             for [(a, ga), (b, gb)] in &segs {
                 flux += (*b - *a).length() * 0.5 * (ga.length() + gb.length());
-                gmin = gmin.min(ga.length()).min(gb.length());
+                wg = wg.min(allowed(*a, ga.length())).min(allowed(*b, gb.length()));
             }
-            let z = if flux > 0.0 { w * gmin / flux } else { zmax };
+            let z = if flux > 0.0 { wg / flux } else { zmax };
             rows.push((c, z.clamp(zmin, zmax)));
         }
         ZetaTable { rows, zeta_max: zmax }

@@ -35,6 +35,7 @@ use crate::toolpath::{MoveKind, Toolpath};
 
 pub mod adaptive;
 pub mod medial;
+pub mod spiral;
 pub mod route;
 
 /// Builds the program from the passes of each level (`levels[i] = (z, passes)`), then the

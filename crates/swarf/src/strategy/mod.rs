@@ -41,6 +41,8 @@ pub enum StrategyKind {
     Zigzag,
     /// Tangent-continuous circles along the medial axis (paper 2).
     Medial,
+    /// One oscillator spiral from the inside out to the walls (paper 4).
+    Spiral,
 }
 
 impl StrategyKind {
@@ -51,6 +53,7 @@ impl StrategyKind {
             "offset" | "contour" => Some(StrategyKind::Offset),
             "zigzag" | "raster" => Some(StrategyKind::Zigzag),
             "medial" | "mat" => Some(StrategyKind::Medial),
+            "spiral" => Some(StrategyKind::Spiral),
             _ => None,
         }
     }
@@ -61,6 +64,7 @@ impl StrategyKind {
             StrategyKind::Offset => "offset",
             StrategyKind::Zigzag => "zigzag",
             StrategyKind::Medial => "medial",
+            StrategyKind::Spiral => "spiral",
         }
     }
 }
@@ -131,6 +135,13 @@ pub struct Params {
     /// Medial: return from each circle's new arc to the next circle on a smaller, "cut back"
     /// turn (paper 2 §2.1, Fig. 2c) instead of the circle's back half, which cuts nothing.
     pub medial_cut_back: bool,
+    /// Spiral: a constant damping ζ (paper 4 eq. 6) instead of ζ chosen per level for the
+    /// stepover and the engagement.
+    pub spiral_zeta: Option<f64>,
+    /// Spiral: start here instead of at the maximum of the region's implicit function.
+    pub spiral_start: Option<crate::geom::DVec2>,
+    /// Spiral: choose ζ and the start point by simulating candidates (paper 4 §4, Figs. 8–9).
+    pub spiral_optimise: bool,
 }
 
 impl Default for Params {
@@ -156,6 +167,9 @@ impl Default for Params {
             corner_fillets: true,
             full_wall_contour: false,
             medial_cut_back: true,
+            spiral_zeta: None,
+            spiral_start: None,
+            spiral_optimise: false,
         }
     }
 }
@@ -248,11 +262,11 @@ pub fn passes(job: &Job, geom: &LayerGeom, params: &Params) -> Result<Vec<Pass>>
     let mut out = match params.strategy {
         // adaptive and medial programs are made while linking (the adaptive passes depend on
         // the material left; the medial path is made of exact arcs)
-        StrategyKind::Adaptive | StrategyKind::Medial => Vec::new(),
+        StrategyKind::Adaptive | StrategyKind::Medial | StrategyKind::Spiral => Vec::new(),
         StrategyKind::Offset => offset::passes(geom, params),
         StrategyKind::Zigzag => zigzag::passes(geom, params),
     };
-    if matches!(params.strategy, StrategyKind::Adaptive | StrategyKind::Medial) {
+    if matches!(params.strategy, StrategyKind::Adaptive | StrategyKind::Medial | StrategyKind::Spiral) {
         return Ok(out);
     }
     let t = std::time::Instant::now();
