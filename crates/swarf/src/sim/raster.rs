@@ -486,6 +486,17 @@ impl RasterSim {
         if self.sure.is_empty() { &self.s } else { &self.sure }
     }
 
+    /// Bytes the cells hold (heights, initial heights, protected heights, states, reach, and
+    /// the surely cut heights when kept); the exact model's primitives are not counted.
+    pub fn cell_bytes(&self) -> usize {
+        self.s.len() * 4
+            + self.s0.len() * 4
+            + self.p.len() * 4
+            + self.state.len()
+            + self.reach.len()
+            + self.sure.len() * 4
+    }
+
     /// Tool radius.
     pub fn radius(&self) -> f64 {
         self.r

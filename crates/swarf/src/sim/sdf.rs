@@ -49,7 +49,8 @@
 //!   samples. Features thinner than half a sample step can be missed, as any sampled field
 //!   misses them.
 //! - **Removed volume**: per slab, the initial minus the current cross-section area times the
-//!   slab's thickness; areas by each sample's coverage `clamp(½ + d/h, 0, 1)` of its cell.
+//!   slab's thickness; the areas are those where the bilinear field is positive (exact along
+//!   eight rows per cell).
 //! - **Gouges**: the tip below the floor by more than `tol`, or the tool within `R − tol` of
 //!   the part and fixtures (the distance from the path to their outline, exact).
 //! - **Rapid collisions** and **plunges**: samples in material within `R − tol` of the rapid's
@@ -178,18 +179,54 @@ impl Field {
         a + (b - a) * ty
     }
 
-    /// Material area: every sample's coverage `clamp(½ + d/h, 0, 1)` of its cell.
+    /// Material area: the area where the bilinear field is positive, cell by cell (the field
+    /// is linear along each of [`AREA_ROWS`] rows of a cell, so each row's share is exact).
+    /// Reading the samples' signs alone would be noisier, and a coverage `½ + d/h` per sample
+    /// would count a wall cut exactly along the stock's outline — where the field is a ridge
+    /// `−|x|` that touches zero without enclosing anything — as a quarter-cell strip of
+    /// material.
     fn area(&self, lat: &Lattice) -> f64 {
         let cell = lat.h * lat.h;
-        let inv = 1.0 / lat.h;
-        self.tiles
-            .iter()
-            .map(|t| match t {
-                Tile::Inside => TT as f64 * cell,
-                Tile::Outside => 0.0,
-                Tile::Dense(s) => s.iter().map(|&d| (0.5 + d as f64 * inv).clamp(0.0, 1.0)).sum::<f64>() * cell,
-            })
-            .sum()
+        let constant = |tx: usize, ty: usize| -> Option<bool> {
+            let mut v = None;
+            for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let (x, y) = (tx + dx, ty + dy);
+                let t = if x < lat.ntx && y < lat.nty { &self.tiles[y * lat.ntx + x] } else { &Tile::Outside };
+                let inside = match t {
+                    Tile::Inside => true,
+                    Tile::Outside => false,
+                    Tile::Dense(_) => return None,
+                };
+                if v.is_some_and(|w| w != inside) {
+                    return None;
+                }
+                v = Some(inside);
+            }
+            v
+        };
+        let mut total = 0.0;
+        for ty in 0..lat.nty {
+            for tx in 0..lat.ntx {
+                match constant(tx, ty) {
+                    Some(true) => total += TT as f64,
+                    Some(false) => {}
+                    None => {
+                        for jj in 0..T {
+                            for ii in 0..T {
+                                let (i, j) = ((tx * T + ii) as i64, (ty * T + jj) as i64);
+                                total += cell_share(
+                                    self.node(lat, i, j),
+                                    self.node(lat, i + 1, j),
+                                    self.node(lat, i, j + 1),
+                                    self.node(lat, i + 1, j + 1),
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        total * cell
     }
 
     /// `d ← min(d, dist(q, path) − r)`: removes the sweep of a disk of radius `r` along `fast`
@@ -247,6 +284,36 @@ impl Field {
     fn bytes(&self) -> usize {
         self.tiles.len() * std::mem::size_of::<Tile>() + self.dense * std::mem::size_of::<[f32; TT]>()
     }
+}
+
+/// Rows per cell of [`Field::area`].
+const AREA_ROWS: usize = 8;
+
+/// The share of the unit cell where the bilinear interpolation of the corner values
+/// (`v00` at (0, 0), `v10` at (1, 0), …) is positive: along each of [`AREA_ROWS`] rows it is
+/// linear in x, and its positive length is exact.
+fn cell_share(v00: f32, v10: f32, v01: f32, v11: f32) -> f64 {
+    let (v00, v10, v01, v11) = (v00 as f64, v10 as f64, v01 as f64, v11 as f64);
+    if v00 > 0.0 && v10 > 0.0 && v01 > 0.0 && v11 > 0.0 {
+        return 1.0;
+    }
+    if v00 <= 0.0 && v10 <= 0.0 && v01 <= 0.0 && v11 <= 0.0 {
+        return 0.0;
+    }
+    let mut sum = 0.0;
+    for k in 0..AREA_ROWS {
+        let y = (k as f64 + 0.5) / AREA_ROWS as f64;
+        // f(x) = a + b·x on the row
+        let a = v00 + (v01 - v00) * y;
+        let b = (v10 + (v11 - v10) * y) - a;
+        sum += if b.abs() < 1e-30 {
+            f64::from(u8::from(a > 0.0))
+        } else {
+            let x0 = -a / b;
+            if b > 0.0 { 1.0 - x0.clamp(0.0, 1.0) } else { x0.clamp(0.0, 1.0) }
+        };
+    }
+    sum / AREA_ROWS as f64
 }
 
 /// One slab of the material: the heights `(bottom, top]` and the cross-section at `at`.
@@ -767,6 +834,25 @@ mod tests {
         let e = s.engagement(DVec2::new(0.0, 4.5), z, DVec2::X, None);
         let want = 90.0 + 30.0;
         assert!((e - want).abs() < 0.2, "{e} vs {want}");
+    }
+
+    #[test]
+    fn a_cut_along_the_outline_leaves_no_phantom_strip() {
+        // the tool's side runs exactly along the stock's edge at y = −20: the field there is a
+        // ridge touching zero, which holds no area
+        let job = job();
+        let mut s = sim(&job);
+        let mut tp = Toolpath::new(job.tool, DVec3::new(-10.0, -17.0, 5.0), 5.0);
+        tp.moves.push(Move {
+            to: DVec3::new(-10.0, -17.0, -2.0),
+            motion: Motion::Line,
+            kind: MoveKind::Plunge,
+            feed: 300.0,
+        });
+        tp.moves.push(feed(DVec3::new(10.0, -17.0, -2.0)));
+        let rp = s.replay(&tp, &mut |_| {});
+        let want = (20.0 * 6.0 + std::f64::consts::PI * 9.0) * 2.0;
+        assert!((rp.removed_volume - want).abs() < 0.001 * want, "{} vs {want}", rp.removed_volume);
     }
 
     #[test]
