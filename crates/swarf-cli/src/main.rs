@@ -44,6 +44,14 @@ enum Cmd {
 }
 
 #[derive(Copy, Clone, PartialEq, Eq, ValueEnum)]
+enum SimArg {
+    /// Heights on a raster of cells.
+    Raster,
+    /// Sampled signed distance fields (paper 4 §4).
+    Sdf,
+}
+
+#[derive(Copy, Clone, PartialEq, Eq, ValueEnum)]
 enum StrategyArg {
     Adaptive,
     Offset,
@@ -176,9 +184,15 @@ struct CommonOpts {
     /// Clearance above the top of the job for travel, mm.
     #[arg(long, value_name = "MM", default_value_t = 5.0, allow_negative_numbers = true)]
     clearance: f64,
-    /// Simulation cell size, mm (default: tool diameter / 100 within [0.02, 0.1]).
+    /// Simulation cell size, mm (default: tool diameter / 100 within [0.02, 0.1]); with
+    /// `--sim sdf`, the distance fields' sample spacing.
     #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     res: Option<f64>,
+    /// Simulator for the report: `raster` (cell heights, exact engagement from the cleared
+    /// geometry) or `sdf` (sampled signed distance fields per slab, engagement by root finding
+    /// on the field; 2.5D jobs only). Planning always uses the raster.
+    #[arg(long, value_enum, default_value = "raster")]
+    sim: SimArg,
     /// Skip the simulation (no engagement, gouge or rest figures).
     #[arg(long)]
     no_simulate: bool,
@@ -462,7 +476,14 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
             PostArg::Linuxcnc => Post::LinuxCnc,
             PostArg::Grbl => Post::Grbl,
         },
-        sim: swarf::sim::SimOptions { res: o.res, ..Default::default() },
+        sim: swarf::sim::SimOptions {
+            res: o.res,
+            engine: match o.sim {
+                SimArg::Raster => swarf::sim::SimEngine::Raster,
+                SimArg::Sdf => swarf::sim::SimEngine::Sdf,
+            },
+            ..Default::default()
+        },
         simulate: !o.no_simulate,
         input_name,
     })

@@ -6,7 +6,7 @@ use crate::plan;
 use crate::post::{self, Header, Post};
 use crate::report::{self, Report};
 use crate::sim::SimOptions;
-use crate::sim::raster::{RasterSim, Replay};
+use crate::sim::raster::Replay;
 use crate::strategy::{self, LayerGeom, Params};
 use crate::toolpath::Toolpath;
 use std::time::Instant;
@@ -110,11 +110,7 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
         rapid_rate: job.rapid_rate,
     };
     finish(toolpath, zs, &about, opts, compute_s, progress, |tp, progress| {
-        let mut sim = RasterSim::new(job, &regions, &opts.sim)?;
-        let mut rp = sim.replay(tp, &mut |f| progress(Stage::Simulate, f));
-        rp.rest_cells = sim.rest_cells();
-        rp.res = sim.grid.res;
-        Ok((rp, sim.rest()))
+        crate::sim::simulate(job, &regions, &opts.sim, tp, &mut |f| progress(Stage::Simulate, f))
     })
 }
 

@@ -326,6 +326,9 @@ fn append(all: &mut Toolpath, tp: Toolpath, safe_z: f64) {
 
 /// Roughs a mesh job: plans, posts and (optionally) simulates it for the report.
 pub fn rough(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64)) -> Result<RoughResult> {
+    if opts.sim.engine != crate::sim::SimEngine::Raster && opts.simulate {
+        return Err(Error::param("--sim", "the distance-field simulator handles 2.5D jobs only; use --sim raster"));
+    }
     let t0 = Instant::now();
     progress(Stage::Plan, 0.0);
     let (mut toolpath, zs) = plan(job, opts, &mut |f| progress(Stage::Plan, f))?;

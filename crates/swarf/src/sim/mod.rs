@@ -11,6 +11,10 @@
 //! - **rapid collisions** (a G0 touching uncut material), **plunges**, removed volume and
 //!   **rest material** (reachable material left standing).
 //!
+//! A second engine, [`sdf::SdfSim`], replays programs on sampled signed distance fields
+//! (paper 4 §4) with the same measures; [`SimOptions::engine`] picks the one [`simulate`] uses
+//! for the report. Both walk the program through the same replay (the `replay` module).
+//!
 //! Each cell holds the stock top height, so the same engine serves every level of a 2.5D job
 //! (material stands where the height is above the tool tip). Moves are cut analytically: for
 //! every cell, the interval of the move during which the axis is within `R` of the cell centre
@@ -20,11 +24,78 @@ pub mod edt;
 pub mod exact;
 pub mod grid;
 pub mod raster;
+pub(crate) mod replay;
+pub mod sdf;
 pub mod sweep;
 
-pub use raster::{RasterSim, Replay, Sample, SampleKind};
+pub use raster::{RasterSim, Replay, Rest, Sample, SampleKind};
+pub use sdf::SdfSim;
 
+use crate::error::{Error, Result};
 use crate::geom;
+use crate::model::{Job, Regions};
+use crate::toolpath::Toolpath;
+
+/// Which material model replays a program for the report.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum SimEngine {
+    /// Heights on a raster of cells ([`RasterSim`]), exact engagement from the cleared
+    /// geometry.
+    #[default]
+    Raster,
+    /// Sampled signed distance fields per slab ([`SdfSim`], paper 4 §4), engagement by root
+    /// finding on the field.
+    Sdf,
+}
+
+impl SimEngine {
+    /// The engine's name on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            SimEngine::Raster => "raster",
+            SimEngine::Sdf => "sdf",
+        }
+    }
+}
+
+impl std::str::FromStr for SimEngine {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "raster" => Ok(SimEngine::Raster),
+            "sdf" => Ok(SimEngine::Sdf),
+            _ => Err(Error::param("--sim", format!("{s:?}: expected raster or sdf"))),
+        }
+    }
+}
+
+/// Replays `tp` on a fresh model of `job` built by the engine `opts.engine` chooses, and
+/// measures the rest material it leaves: the replay (its rest cells and cell size filled in)
+/// and the rest.
+pub fn simulate(
+    job: &Job,
+    regions: &Regions,
+    opts: &SimOptions,
+    tp: &Toolpath,
+    progress: &mut dyn FnMut(f64),
+) -> Result<(Replay, Rest)> {
+    match opts.engine {
+        SimEngine::Raster => {
+            let mut sim = RasterSim::new(job, regions, opts)?;
+            let mut rp = sim.replay(tp, progress);
+            rp.rest_cells = sim.rest_cells();
+            rp.res = sim.grid.res;
+            Ok((rp, sim.rest()))
+        }
+        SimEngine::Sdf => {
+            let mut sim = SdfSim::new(job, regions, opts)?;
+            let mut rp = sim.replay(tp, progress);
+            rp.rest_cells = sim.rest_cells();
+            Ok((rp, sim.rest()))
+        }
+    }
+}
 
 /// Simulation settings.
 #[derive(Debug, Clone, PartialEq)]
@@ -51,6 +122,9 @@ pub struct SimOptions {
     /// rapid. On for the levels of z-level roughing, whose long rapids at depth cross large
     /// cleared areas; it makes cutting in the model about a tenth slower.
     pub sure_links: bool,
+    /// The engine [`simulate`] replays a program with (the planner always uses the raster).
+    /// For [`SimEngine::Sdf`], `res` is the sample spacing of the fields.
+    pub engine: SimEngine,
 }
 
 impl Default for SimOptions {
@@ -64,6 +138,7 @@ impl Default for SimOptions {
             max_cells: 60_000_000,
             heights: None,
             sure_links: false,
+            engine: SimEngine::Raster,
         }
     }
 }

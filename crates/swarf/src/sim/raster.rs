@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::geom::index::EdgeIndex;
 use crate::geom::{Area, DVec2, DVec3};
 use crate::model::{Job, Regions};
-use crate::toolpath::{MoveKind, Toolpath, move_length};
+use crate::toolpath::Toolpath;
 use rayon::prelude::*;
 
 /// Cell state bits (paper 1 §4: part / stock; fixture; neither = free space).
@@ -484,6 +484,17 @@ impl RasterSim {
     #[inline]
     fn link_heights(&self) -> &[f32] {
         if self.sure.is_empty() { &self.s } else { &self.sure }
+    }
+
+    /// Bytes the cells hold (heights, initial heights, protected heights, states, reach, and
+    /// the surely cut heights when kept); the exact model's primitives are not counted.
+    pub fn cell_bytes(&self) -> usize {
+        self.s.len() * 4
+            + self.s0.len() * 4
+            + self.p.len() * 4
+            + self.state.len()
+            + self.reach.len()
+            + self.sure.len() * 4
     }
 
     /// Tool radius.
@@ -977,148 +988,7 @@ impl RasterSim {
     /// Replays a toolpath: cuts it, samples engagement, finds gouges, collisions and plunges.
     /// `progress` is called with the fraction done.
     pub fn replay(&mut self, tp: &Toolpath, progress: &mut dyn FnMut(f64)) -> Replay {
-        let mut out = Replay::default();
-        let mut cum = 0.0;
-        let nmoves = tp.moves.len().max(1);
-        // entry bore tracking
-        let mut bore: Option<(DVec2, f64, f64)> = None; // centre, radius, length allowance left
-        let mut entry_pts: Vec<DVec3> = Vec::new();
-        let mut entry_arc_center: Option<(DVec2, f64)> = None;
-        for (mi, (from, m)) in tp.segments().enumerate() {
-            if mi % 256 == 0 {
-                progress(mi as f64 / nmoves as f64);
-            }
-            let path = Path::of(from, m);
-            let len3 = move_length(from, m);
-            if m.kind == MoveKind::Entry || m.kind == MoveKind::Plunge {
-                if entry_pts.is_empty() {
-                    entry_pts.push(from);
-                }
-                entry_pts.push(m.to);
-                if let crate::toolpath::Motion::Arc { center, .. } = m.motion {
-                    let rr = (from.truncate() - center).length();
-                    entry_arc_center = Some((center, entry_arc_center.map_or(rr, |(_, r): (DVec2, f64)| r.max(rr))));
-                }
-            } else if !entry_pts.is_empty() {
-                let (c, rad) = match entry_arc_center {
-                    Some(cr) => cr,
-                    None => {
-                        let mut lo = entry_pts[0].truncate();
-                        let mut hi = lo;
-                        for p in &entry_pts {
-                            lo = lo.min(p.truncate());
-                            hi = hi.max(p.truncate());
-                        }
-                        ((lo + hi) / 2.0, (hi - lo).length() / 2.0)
-                    }
-                };
-                bore = Some((c, rad, std::f64::consts::TAU * rad + self.r));
-                entry_pts.clear();
-                entry_arc_center = None;
-            }
-            if m.is_rapid() {
-                // a rapid must not touch uncut material
-                let mut worst = 0.0f64;
-                let mut at = m.to;
-                visit_above(
-                    &self.grid,
-                    &self.s,
-                    Some((&self.bmax, self.nbx)),
-                    &path,
-                    self.r - self.tol,
-                    self.eps,
-                    |k, q, z| {
-                        let d = self.s[k] as f64 - z;
-                        if d > worst {
-                            worst = d;
-                            at = DVec3::new(q.x, q.y, z);
-                        }
-                        true
-                    },
-                );
-                if worst > 0.0 {
-                    out.rapid_collisions.push(Event { move_index: mi, at: at.to_array(), depth: worst });
-                }
-                bore = None;
-            } else {
-                let xy = path.xy_length();
-                let dz = m.to.z - from.z;
-                let steep = xy <= 1e-3 || (dz < 0.0 && (-dz).atan2(xy).to_degrees() >= 80.0);
-                if steep && dz < 0.0 && self.material_under(m.to.truncate(), m.to.z) {
-                    out.plunges.push(Event { move_index: mi, at: m.to.to_array(), depth: -dz });
-                }
-                if xy > 1e-9 {
-                    let n = (xy / self.sample_step).ceil().max(1.0) as usize;
-                    let kind = if steep && dz < 0.0 {
-                        SampleKind::Plunge
-                    } else if dz.abs() > 1e-9 {
-                        SampleKind::Descending
-                    } else {
-                        SampleKind::Lateral
-                    };
-                    let step_len = len3 / n as f64;
-                    for k in 1..=n {
-                        let t = k as f64 / n as f64;
-                        let p = path.at(t);
-                        let dir = path.dir(t);
-                        let cur = path.sub(0.0, t);
-                        // the pixel ring is half a pixel outside the tool; the move's own cut up
-                        // to the previous sample is what it must not see (up to this one would
-                        // swallow the ring's sides)
-                        let before = path.sub(0.0, (k - 1) as f64 / n as f64);
-                        let (tea, tea_px) = if kind == SampleKind::Plunge {
-                            (360.0, 360.0)
-                        } else {
-                            (
-                                self.engagement_exact(p.truncate(), p.z, dir, Some(&cur)),
-                                self.engagement_pixel(p.truncate(), p.z, dir, Some(&before)),
-                            )
-                        };
-                        cum += step_len;
-                        let in_bore = match (&mut bore, kind) {
-                            (_, SampleKind::Descending | SampleKind::Plunge)
-                                if matches!(m.kind, MoveKind::Entry | MoveKind::Plunge) =>
-                            {
-                                true
-                            }
-                            (Some((c, rad, left)), SampleKind::Lateral) => {
-                                let inside = (p.truncate() - *c).length() <= *rad + (self.grid.res).max(0.05 * self.r)
-                                    && *left > 0.0;
-                                *left -= step_len;
-                                if !inside {
-                                    bore = None;
-                                }
-                                inside
-                            }
-                            _ => false,
-                        };
-                        out.samples.push(Sample {
-                            s: cum,
-                            at: p,
-                            tea: tea as f32,
-                            tea_pixel: tea_px as f32,
-                            kind,
-                            bore: in_bore,
-                            len: step_len as f32,
-                            feed: m.feed as f32,
-                            mi: mi as u32,
-                        });
-                    }
-                } else {
-                    cum += len3;
-                }
-            }
-            let (g, at) = self.gouge_depth(&path);
-            if g > 0.0 {
-                out.gouges.push(Event { move_index: mi, at: at.to_array(), depth: g });
-            }
-            self.cut_move(&path);
-        }
-        progress(1.0);
-        let cell = self.grid.res * self.grid.res;
-        out.removed_volume =
-            self.s0.iter().zip(&self.s).filter(|(a, _)| a.is_finite()).map(|(a, b)| (a - b) as f64).sum::<f64>() * cell;
-        out
+        super::replay::run(self, tp, progress)
     }
 
     /// Cuts a whole move, a long one in pieces of at most four radii (keeps the cell windows
@@ -1206,6 +1076,58 @@ impl RasterSim {
             }
         }
         out
+    }
+}
+
+impl super::replay::Engine for RasterSim {
+    fn radius(&self) -> f64 {
+        self.r
+    }
+
+    fn spacing(&self) -> f64 {
+        self.grid.res
+    }
+
+    fn sample_step(&self) -> f64 {
+        self.sample_step
+    }
+
+    fn rapid_depth(&self, path: &Path, to: DVec3) -> (f64, DVec3) {
+        let mut worst = 0.0f64;
+        let mut at = to;
+        visit_above(&self.grid, &self.s, Some((&self.bmax, self.nbx)), path, self.r - self.tol, self.eps, |k, q, z| {
+            let d = self.s[k] as f64 - z;
+            if d > worst {
+                worst = d;
+                at = DVec3::new(q.x, q.y, z);
+            }
+            true
+        });
+        (worst, at)
+    }
+
+    fn material_under(&self, c: DVec2, z: f64) -> bool {
+        RasterSim::material_under(self, c, z)
+    }
+
+    fn engagement(&mut self, p: DVec3, dir: DVec2, cur: &Path, before: &Path) -> (f64, f64) {
+        (
+            self.engagement_exact(p.truncate(), p.z, dir, Some(cur)),
+            self.engagement_pixel(p.truncate(), p.z, dir, Some(before)),
+        )
+    }
+
+    fn gouge_depth(&self, path: &Path) -> (f64, DVec3) {
+        RasterSim::gouge_depth(self, path)
+    }
+
+    fn cut_move(&mut self, path: &Path) {
+        RasterSim::cut_move(self, path);
+    }
+
+    fn removed_volume(&self) -> f64 {
+        let cell = self.grid.res * self.grid.res;
+        self.s0.iter().zip(&self.s).filter(|(a, _)| a.is_finite()).map(|(a, b)| (a - b) as f64).sum::<f64>() * cell
     }
 }
 

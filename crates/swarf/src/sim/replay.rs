@@ -1,0 +1,158 @@
+//! The replay of a toolpath, shared by the simulation engines: it walks the moves, tracks the
+//! entry bores, samples engagement along cutting moves and asks the engine for what depends on
+//! its material model (engagement, collisions, plunges, gouges, the cut itself, the removed
+//! volume). Both [`super::raster::RasterSim`] and [`super::sdf::SdfSim`] replay through it, so
+//! their samples stand at the same places and carry the same kinds, bores and lengths.
+
+use super::raster::{Event, Replay, Sample, SampleKind};
+use super::sweep::Path;
+use crate::geom::{DVec2, DVec3};
+use crate::toolpath::{MoveKind, Toolpath, move_length};
+
+/// What a material model answers during a replay.
+pub(crate) trait Engine {
+    /// Tool radius, mm.
+    fn radius(&self) -> f64;
+    /// The model's cell size or sample spacing, mm (the slack of the entry-bore test).
+    fn spacing(&self) -> f64;
+    /// Spacing of engagement samples along cutting moves, mm.
+    fn sample_step(&self) -> f64;
+    /// How deep a rapid along `path` runs into uncut material (0 when it does not), and where.
+    fn rapid_depth(&self, path: &Path, to: DVec3) -> (f64, DVec3);
+    /// Material within `R − tol` of a tool standing at `c` with its tip at `z`.
+    fn material_under(&self, c: DVec2, z: f64) -> bool;
+    /// Engagement (the engine's own measure, and the pixel measure or the same again), degrees,
+    /// of the tool at `p` moving along `dir`; `cur` is the current move up to this sample,
+    /// `before` up to the previous one.
+    fn engagement(&mut self, p: DVec3, dir: DVec2, cur: &Path, before: &Path) -> (f64, f64);
+    /// Gouge depth of a move (0 when clean) and where.
+    fn gouge_depth(&self, path: &Path) -> (f64, DVec3);
+    /// Cuts a whole move into the material.
+    fn cut_move(&mut self, path: &Path);
+    /// Volume removed so far, mm³.
+    fn removed_volume(&self) -> f64;
+}
+
+/// Replays `tp` on `m`: cuts it, samples engagement, finds gouges, collisions and plunges.
+/// `progress` is called with the fraction done.
+pub(crate) fn run<M: Engine>(m_: &mut M, tp: &Toolpath, progress: &mut dyn FnMut(f64)) -> Replay {
+    let mut out = Replay::default();
+    let mut cum = 0.0;
+    let nmoves = tp.moves.len().max(1);
+    let r = m_.radius();
+    let step = m_.sample_step();
+    let slack = m_.spacing().max(0.05 * r);
+    // entry bore tracking
+    let mut bore: Option<(DVec2, f64, f64)> = None; // centre, radius, length allowance left
+    let mut entry_pts: Vec<DVec3> = Vec::new();
+    let mut entry_arc_center: Option<(DVec2, f64)> = None;
+    for (mi, (from, m)) in tp.segments().enumerate() {
+        if mi % 256 == 0 {
+            progress(mi as f64 / nmoves as f64);
+        }
+        let path = Path::of(from, m);
+        let len3 = move_length(from, m);
+        if m.kind == MoveKind::Entry || m.kind == MoveKind::Plunge {
+            if entry_pts.is_empty() {
+                entry_pts.push(from);
+            }
+            entry_pts.push(m.to);
+            if let crate::toolpath::Motion::Arc { center, .. } = m.motion {
+                let rr = (from.truncate() - center).length();
+                entry_arc_center = Some((center, entry_arc_center.map_or(rr, |(_, r): (DVec2, f64)| r.max(rr))));
+            }
+        } else if !entry_pts.is_empty() {
+            let (c, rad) = match entry_arc_center {
+                Some(cr) => cr,
+                None => {
+                    let mut lo = entry_pts[0].truncate();
+                    let mut hi = lo;
+                    for p in &entry_pts {
+                        lo = lo.min(p.truncate());
+                        hi = hi.max(p.truncate());
+                    }
+                    ((lo + hi) / 2.0, (hi - lo).length() / 2.0)
+                }
+            };
+            bore = Some((c, rad, std::f64::consts::TAU * rad + r));
+            entry_pts.clear();
+            entry_arc_center = None;
+        }
+        if m.is_rapid() {
+            // a rapid must not touch uncut material
+            let (worst, at) = m_.rapid_depth(&path, m.to);
+            if worst > 0.0 {
+                out.rapid_collisions.push(Event { move_index: mi, at: at.to_array(), depth: worst });
+            }
+            bore = None;
+        } else {
+            let xy = path.xy_length();
+            let dz = m.to.z - from.z;
+            let steep = xy <= 1e-3 || (dz < 0.0 && (-dz).atan2(xy).to_degrees() >= 80.0);
+            if steep && dz < 0.0 && m_.material_under(m.to.truncate(), m.to.z) {
+                out.plunges.push(Event { move_index: mi, at: m.to.to_array(), depth: -dz });
+            }
+            if xy > 1e-9 {
+                let n = (xy / step).ceil().max(1.0) as usize;
+                let kind = if steep && dz < 0.0 {
+                    SampleKind::Plunge
+                } else if dz.abs() > 1e-9 {
+                    SampleKind::Descending
+                } else {
+                    SampleKind::Lateral
+                };
+                let step_len = len3 / n as f64;
+                for k in 1..=n {
+                    let t = k as f64 / n as f64;
+                    let p = path.at(t);
+                    let dir = path.dir(t);
+                    let cur = path.sub(0.0, t);
+                    // the pixel ring is half a pixel outside the tool; the move's own cut up
+                    // to the previous sample is what it must not see (up to this one would
+                    // swallow the ring's sides)
+                    let before = path.sub(0.0, (k - 1) as f64 / n as f64);
+                    let (tea, tea_px) =
+                        if kind == SampleKind::Plunge { (360.0, 360.0) } else { m_.engagement(p, dir, &cur, &before) };
+                    cum += step_len;
+                    let in_bore = match (&mut bore, kind) {
+                        (_, SampleKind::Descending | SampleKind::Plunge)
+                            if matches!(m.kind, MoveKind::Entry | MoveKind::Plunge) =>
+                        {
+                            true
+                        }
+                        (Some((c, rad, left)), SampleKind::Lateral) => {
+                            let inside = (p.truncate() - *c).length() <= *rad + slack && *left > 0.0;
+                            *left -= step_len;
+                            if !inside {
+                                bore = None;
+                            }
+                            inside
+                        }
+                        _ => false,
+                    };
+                    out.samples.push(Sample {
+                        s: cum,
+                        at: p,
+                        tea: tea as f32,
+                        tea_pixel: tea_px as f32,
+                        kind,
+                        bore: in_bore,
+                        len: step_len as f32,
+                        feed: m.feed as f32,
+                        mi: mi as u32,
+                    });
+                }
+            } else {
+                cum += len3;
+            }
+        }
+        let (g, at) = m_.gouge_depth(&path);
+        if g > 0.0 {
+            out.gouges.push(Event { move_index: mi, at: at.to_array(), depth: g });
+        }
+        m_.cut_move(&path);
+    }
+    progress(1.0);
+    out.removed_volume = m_.removed_volume();
+    out
+}
