@@ -408,9 +408,11 @@ fn placement(o: &PlacementOpts) -> Result<Overrides, Failure> {
 
 /// Parses `X,Y` (for `--spiral-start`).
 fn pair(t: &str) -> Result<swarf::geom::DVec2, Failure> {
-    let v: Vec<f64> = t.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| {
-        swarf::Error::param("--spiral-start", format!("{t:?}: expected two numbers X,Y (mm)"))
-    })?;
+    let v: Vec<f64> = t
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| swarf::Error::param("--spiral-start", format!("{t:?}: expected two numbers X,Y (mm)")))?;
     match v[..] {
         [x, y] if x.is_finite() && y.is_finite() => Ok(swarf::geom::DVec2::new(x, y)),
         _ => Err(swarf::Error::param("--spiral-start", format!("{t:?}: expected two numbers X,Y (mm)")).into()),

@@ -382,6 +382,21 @@ fn medial_grbl() {
     run_all("medial", "grbl");
 }
 
+/// The oscillator spiral (paper 4) on the three cases it is meant for (it refuses pockets with
+/// islands).
+#[test]
+fn spiral_linuxcnc_and_grbl() {
+    let Some(rs274) = rs274() else { return };
+    let root = repo_root().join("examples/cases");
+    let mut bad = Vec::new();
+    for (case, post) in
+        [("round_pocket.json", "linuxcnc"), ("square_pocket.json", "grbl"), ("l_pocket.json", "linuxcnc")]
+    {
+        bad.extend(check_case(&rs274, &root.join(case), "spiral", post, &[]));
+    }
+    assert!(bad.is_empty(), "{bad:#?}");
+}
+
 /// A few option combinations the cases do not have: several levels (entries at every level),
 /// the finishing contour with stock to leave, outside-in conventional offsets, an angled zigzag
 /// given by engagement.

@@ -293,7 +293,7 @@ pub fn optimise_spiral(
             }
         };
         tp.quantize(post::COORD_STEP, post::CENTER_STEP);
-        let mut sim = RasterSim::new(job, regions, &opts.sim)?;
+        let mut sim = crate::sim::raster::RasterSim::new(job, regions, &opts.sim)?;
         let rp = sim.replay(&tp, &mut |_| {});
         let mut rep = Report::default();
         report::fill(&mut rep, &tp, &rp, &sim.rest(), job.rapid_rate);

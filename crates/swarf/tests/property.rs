@@ -407,7 +407,7 @@ fn flags(p: &Params, res: f64) -> String {
             OffsetOrder::OutsideIn => " --order outside-in",
         }),
         StrategyKind::Zigzag => write!(s, " --angle {}", p.zigzag_angle_deg).unwrap(),
-        StrategyKind::Adaptive | StrategyKind::Medial => {}
+        StrategyKind::Adaptive | StrategyKind::Medial | StrategyKind::Spiral => {}
     }
     write!(s, " --res {res}").unwrap();
     s

@@ -316,7 +316,10 @@ pub fn spiral(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<S
         let s = spiral_once(field, start, opts, gain)?;
         let m = s.max_spacing;
         if std::env::var("SWARF_DEBUG").is_ok() {
-            eprintln!("spiral gain {gain:.4}: {:.1} turns, length {:.1}, max spacing {m:.4} (w {w})", s.turns, s.length);
+            eprintln!(
+                "spiral gain {gain:.4}: {:.1} turns, length {:.1}, max spacing {m:.4} (w {w})",
+                s.turns, s.length
+            );
         }
         let ok = m <= opts.accept_gap.unwrap_or(w);
         if ok && best.as_ref().is_none_or(|b| m > b.max_spacing) {

@@ -35,8 +35,8 @@ use crate::toolpath::{MoveKind, Toolpath};
 
 pub mod adaptive;
 pub mod medial;
-pub mod spiral;
 pub mod route;
+pub mod spiral;
 
 /// Builds the program from the passes of each level (`levels[i] = (z, passes)`), then the
 /// finishing passes of each level.

@@ -69,7 +69,13 @@ pub struct PiecePath {
 }
 
 /// The spirals of a job's tool-centre region, one per connected piece.
-pub fn plan_pieces(job: &Job, regions: &Regions, geom: &LayerGeom, params: &Params, choice: &SpiralChoice) -> Result<Vec<PiecePath>> {
+pub fn plan_pieces(
+    job: &Job,
+    regions: &Regions,
+    geom: &LayerGeom,
+    params: &Params,
+    choice: &SpiralChoice,
+) -> Result<Vec<PiecePath>> {
     let region = super::medial::region(regions, geom);
     let mut out = Vec::new();
     for piece in region.components() {
@@ -122,7 +128,13 @@ impl Field for Shaped<'_> {
 /// largest inscribed radius).
 pub const SHAPE_LENGTH: f64 = 1.0;
 
-fn plan_piece(job: &Job, piece: &Area, geom: &LayerGeom, params: &Params, choice: &SpiralChoice) -> Result<Option<PiecePath>> {
+fn plan_piece(
+    job: &Job,
+    piece: &Area,
+    geom: &LayerGeom,
+    params: &Params,
+    choice: &SpiralChoice,
+) -> Result<Option<PiecePath>> {
     let base = AreaField::new(piece);
     let Some((lo, hi)) = base.bounds() else { return Ok(None) };
     let (start, _) = match choice.start {
@@ -164,6 +176,7 @@ fn plan_piece(job: &Job, piece: &Area, geom: &LayerGeom, params: &Params, choice
 }
 
 /// Builds the program of a level job from its spirals.
+#[allow(clippy::too_many_arguments)]
 pub fn link_spiral(
     job: &Job,
     regions: &Regions,
@@ -282,14 +295,24 @@ pub fn fixed_zeta(job: &Job, regions: &Regions, geom: &LayerGeom, params: &Param
         plan_pieces(job, regions, geom, params, &choice)
             .is_ok_and(|ps| ps.iter().all(|p| p.spiral.max_spacing <= geom.step))
     };
-    let (mut lo, mut hi) = (1e-4, 0.5);
-    if !fits(lo) {
-        return Ok(None);
-    }
+    // halving down from a wide spiral (each try is quick: few turns) to the first that fits,
+    // then bisection between it and the one before
+    let mut hi = 0.5;
     if fits(hi) {
         return Ok(Some(hi));
     }
-    for _ in 0..12 {
+    let mut lo = hi;
+    loop {
+        lo *= 0.5;
+        if lo < 1e-4 {
+            return Ok(None);
+        }
+        if fits(lo) {
+            break;
+        }
+        hi = lo;
+    }
+    for _ in 0..6 {
         let m = (lo * hi).sqrt();
         if fits(m) { lo = m } else { hi = m }
     }
