@@ -23,7 +23,10 @@
 //! holes is refused with a message naming the other strategies; a job whose tool-centre region
 //! falls apart (a pocket with narrow necks) gets one spiral per piece, each with its entry.
 //!
-//! [`optimise`] is the loop of §4, Figs. 8–9: plan a spiral for each candidate (ζ and start
+//! The region's own `f` is scaled down with the distance from the start ([`Shaped`]), so that no
+//! level runs the length of a long leg at once (a ridge of `f`).
+//!
+//! [`crate::pipeline::optimise_spiral`] is the loop of §4, Figs. 8–9: plan a spiral for each candidate (ζ and start
 //! point), simulate it, and keep the fastest that clears the pocket within the engagement bound.
 
 use super::Linker;
