@@ -292,7 +292,7 @@ fn unknown_names_and_malformed_options() {
     let d = TempDir::new("usage");
     let c = case("square_pocket.json");
     let c = c.to_str().expect("utf-8");
-    expect_usage_error(&d, &["rough", c, "-o", "out.ngc", "--strategy", "spiral"], &["'spiral'", "--strategy"]);
+    expect_usage_error(&d, &["rough", c, "-o", "out.ngc", "--strategy", "trochoidal"], &["'trochoidal'", "--strategy"]);
     expect_usage_error(&d, &["rough", c, "-o", "out.ngc", "--post", "fanuc"], &["'fanuc'", "--post"]);
     expect_usage_error(&d, &["rough", c, "-o", "out.ngc", "--tool-diameter", "six"], &["'six'", "--tool-diameter"]);
     expect_usage_error(
