@@ -669,8 +669,6 @@ impl ZetaTable {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geom::Area;
-    use crate::geom::area::Polygon;
     use crate::implicit::RFamily;
     use crate::implicit::region::AreaField;
     use crate::implicit::rfunc::Dual;
@@ -771,15 +769,7 @@ mod tests {
 
     #[test]
     fn l_shape_spiral_stays_inside_and_keeps_the_stepover() {
-        let outer = vec![
-            DVec2::new(0.0, 0.0),
-            DVec2::new(40.0, 0.0),
-            DVec2::new(40.0, 15.0),
-            DVec2::new(15.0, 15.0),
-            DVec2::new(15.0, 40.0),
-            DVec2::new(0.0, 40.0),
-        ];
-        let area = Area { polys: vec![Polygon { outer, holes: vec![] }] };
+        let area = crate::implicit::region::tests::l_shape();
         let field = AreaField::new(&area);
         check_region(&field, &|p| area.contains(p), 2.0, 0.2);
     }

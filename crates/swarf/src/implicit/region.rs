@@ -302,11 +302,12 @@ impl Field for AreaField {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::geom::area::Polygon;
 
-    fn l_shape() -> Area {
+    /// An L, 40 mm on its long sides, 15 mm wide arms (also for the oscillator's tests).
+    pub(crate) fn l_shape() -> Area {
         let outer = vec![
             DVec2::new(0.0, 0.0),
             DVec2::new(40.0, 0.0),

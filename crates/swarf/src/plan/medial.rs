@@ -346,17 +346,24 @@ pub fn bridge_normal(a: &Circle, b: &Circle, s: f64) -> Option<DVec2> {
 /// cover the arc of `k` outside the circle `prev` before it: the whole turn without one.
 fn cover(k: &Circle, prev: Option<&Circle>, a_in: f64, s: f64) -> f64 {
     let Some(p) = prev else { return TAU };
-    let d = (p.c - k.c).length();
-    if d >= k.rho + p.rho || d + p.rho <= k.rho {
-        return TAU;
+    if let Some((_, end)) = new_arc(k, p, s) {
+        return sweep(a_in, end, s);
     }
-    if d + k.rho <= p.rho {
-        return 0.0;
+    // apart from `p`, or holding it: all of it; inside it: nothing new
+    let d = (p.c - k.c).length();
+    if d >= k.rho + p.rho || d + p.rho <= k.rho { TAU } else { 0.0 }
+}
+
+/// The arc of `k` outside the circle `p` when the two cross: its start and end angles, in
+/// direction `s` (from tc + sβ to tc − sβ, tc the angle towards `p`'s centre).
+fn new_arc(k: &Circle, p: &Circle, s: f64) -> Option<(f64, f64)> {
+    let d = (p.c - k.c).length();
+    if d >= k.rho + p.rho || d + p.rho <= k.rho || d + k.rho <= p.rho {
+        return None;
     }
     let tc = ang(p.c - k.c);
     let beta = ((k.rho * k.rho + d * d - p.rho * p.rho) / (2.0 * k.rho * d)).clamp(-1.0, 1.0).acos();
-    // the new arc runs (in direction s) from tc + sβ to tc − sβ
-    sweep(a_in, tc - s * beta, s)
+    Some((tc + s * beta, tc - s * beta))
 }
 
 /// The region whose medial axis carries the circles: where the tool centre may go, less the
@@ -432,7 +439,8 @@ pub const CUT_BACK: f64 = 0.3;
 /// `nk` (paper 2 §2.1, Fig. 2c: "cut and round the back half of the circular arc ... making
 /// the tool return to its next cutting position faster"): a circle `q` of radius
 /// [`CUT_BACK`]·ρ inside `k`, tangent to it at `a_e` (so the turn onto it is smooth), and the
-/// outer bi-tangent from `q` to `nk` on the side that keeps the direction. Returns `q` and the
+/// outer bi-tangent from `q` to `nk` on the side that keeps the direction (`a_out`: where the
+/// usual bridge from `k` leaves, for the comparison of lengths). Returns `q` and the
 /// angle at which the bridge leaves `q` and meets `nk` (the bi-tangent's common normal).
 ///
 /// Nothing is lost: the back half of `k` lies inside the circle before it (that is what
@@ -440,7 +448,7 @@ pub const CUT_BACK: f64 = 0.3;
 /// cleared, and `q` lies inside `k`. `None` when the turn would not be shorter than the way
 /// round `k`, or when the bridge would meet `nk` past the start of its new arc (material the
 /// tool would then skip).
-fn cut_back(k: &Circle, a_e: f64, nk: &Circle, s: f64) -> Option<(Circle, f64)> {
+fn cut_back(k: &Circle, a_e: f64, nk: &Circle, a_out: f64, s: f64) -> Option<(Circle, f64)> {
     let rho = (CUT_BACK * k.rho).max(RHO_MIN);
     if rho >= 0.9 * k.rho {
         return None;
@@ -448,18 +456,9 @@ fn cut_back(k: &Circle, a_e: f64, nk: &Circle, s: f64) -> Option<(Circle, f64)> 
     let e = DVec2::new(a_e.cos(), a_e.sin());
     let q = Circle { c: k.c + e * (k.rho - rho), rho };
     let a2 = ang(bridge_normal(&q, nk, s)?);
-    let a_out = ang(bridge_normal(k, nk, s)?);
-    // the new arc of `nk` (outside `k`) runs from `ns` to `ne` in direction s; the bridge must
-    // meet `nk` outside it
-    let d = (k.c - nk.c).length();
-    if d < nk.rho + k.rho && d + k.rho > nk.rho && d + nk.rho > k.rho {
-        let tc = ang(k.c - nk.c);
-        let beta = ((nk.rho * nk.rho + d * d - k.rho * k.rho) / (2.0 * nk.rho * d)).clamp(-1.0, 1.0).acos();
-        let (ns, ne) = (tc + s * beta, tc - s * beta);
-        if sweep(a2, ns, s) > sweep(a2, ne, s) {
-            return None;
-        }
-    } else {
+    // the bridge must meet `nk` outside its new arc (outside `k`)
+    let (ns, ne) = new_arc(nk, k, s)?;
+    if sweep(a2, ns, s) > sweep(a2, ne, s) {
         return None;
     }
     // lengths to the same point of `nk` (where the usual bridge lands, or where this one does,
@@ -515,8 +514,9 @@ fn cut_run(l: &mut Linker, run: &Run, z: f64, step: f64) {
         match (next, normal) {
             (Some(nk), Some(nrm)) => {
                 let a_e = a_in + s * need;
+                let a_out = ang(nrm);
                 if l.params.medial_cut_back
-                    && let Some((q, a2)) = cut_back(&k, a_e, nk, s)
+                    && let Some((q, a2)) = cut_back(&k, a_e, nk, a_out, s)
                     && l.keep_safe(on(&q, a2), on(nk, a2), z)
                 {
                     // the new arc, then the tighter turn and the bridge from it, both in the
@@ -534,7 +534,6 @@ fn cut_run(l: &mut Linker, run: &Run, z: f64, step: f64) {
                     i = j;
                     continue;
                 }
-                let a_out = ang(nrm);
                 let total = need + sweep(a_e, a_out, s);
                 arc(l, &k, a_in, total, s, z);
                 let to = on(nk, a_out);

@@ -140,11 +140,8 @@ fn plan_piece(
 ) -> Result<Option<PiecePath>> {
     let base = AreaField::new(piece);
     let Some((lo, hi)) = base.bounds() else { return Ok(None) };
-    let (start, _) = match choice.start {
-        Some(p) => (p, base.eval(p).v),
-        None => maximum(&base, lo, hi).unwrap_or((lo, 0.0)),
-    };
-    let fmax = maximum(&base, lo, hi).map_or(0.0, |m| m.1);
+    let (top, fmax) = maximum(&base, lo, hi).unwrap_or((lo, 0.0));
+    let start = choice.start.unwrap_or(top);
     let field = Shaped { f: &base, s: start, l: SHAPE_LENGTH * fmax.max(1e-3) };
     let f0 = field.eval(start).v;
     if f0 <= TRACK_LEVEL + 1e-3 {
@@ -191,24 +188,12 @@ pub fn link_spiral(
     choice: &SpiralChoice,
 ) -> Result<Toolpath> {
     let pieces = plan_pieces(job, regions, geom, params, choice)?;
-    build(job, regions, params, zs, finish, sim_opts, &pieces)
-}
-
-fn build(
-    job: &Job,
-    regions: &Regions,
-    params: &Params,
-    zs: &[f64],
-    finish: &[(f64, Vec<Pass>)],
-    sim_opts: &SimOptions,
-    pieces: &[PiecePath],
-) -> Result<Toolpath> {
     let mut l = Linker::new(job, regions, params, sim_opts, pieces[0].start)?;
     let n = zs.len();
     for (i, z) in zs.iter().enumerate() {
         l.tp.note(format!("level {} of {}: z {:.3}", i + 1, n, z));
         l.down_at = None;
-        for p in pieces {
+        for p in &pieces {
             cut_piece(&mut l, p, *z);
         }
     }

@@ -595,25 +595,7 @@ impl RasterSim {
     /// Exact distance from the XY path to the part/fixture boundary (capped at `max`), or 0
     /// when the path starts inside them.
     pub fn keep_distance(&self, path: &Path, max: f64) -> f64 {
-        let p0 = path.at(0.0).truncate();
-        if self.keep.contains(p0) {
-            return 0.0;
-        }
-        match *path {
-            Path::Line { a, b } => self.keep_edges.segment_distance(a.truncate(), b.truncate(), max),
-            Path::Arc(g) => {
-                // chords with sagitta below 1e-4 mm
-                let n = swarf_import::contour::arc_steps(g.radius, g.sweep.abs(), 1e-4);
-                let mut best = max;
-                let mut prev = g.at(0.0).truncate();
-                for i in 1..=n {
-                    let q = g.at(i as f64 / n as f64).truncate();
-                    best = best.min(self.keep_edges.segment_distance(prev, q, max));
-                    prev = q;
-                }
-                best
-            }
-        }
+        super::sweep::keep_distance(&self.keep, &self.keep_edges, path, max)
     }
 
     /// Cuts the path into the material (and into the surely cut heights, when they are kept,

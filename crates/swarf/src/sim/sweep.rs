@@ -304,6 +304,35 @@ pub fn angle_in_sweep(ang: f64, a0: f64, sweep: f64) -> bool {
     }
 }
 
+/// Exact distance from the XY path to the boundary of `keep` (the part and fixtures, whose
+/// edges `edges` indexes), capped at `max`, or 0 when the path starts inside `keep`. Arcs are
+/// measured by chords whose sagitta is below 1e-4 mm. Both simulators use it.
+pub(crate) fn keep_distance(
+    keep: &crate::geom::Area,
+    edges: &crate::geom::index::EdgeIndex,
+    path: &Path,
+    max: f64,
+) -> f64 {
+    let p0 = path.at(0.0).truncate();
+    if keep.contains(p0) {
+        return 0.0;
+    }
+    match *path {
+        Path::Line { a, b } => edges.segment_distance(a.truncate(), b.truncate(), max),
+        Path::Arc(g) => {
+            let n = swarf_import::contour::arc_steps(g.radius, g.sweep.abs(), 1e-4);
+            let mut best = max;
+            let mut prev = g.at(0.0).truncate();
+            for i in 1..=n {
+                let q = g.at(i as f64 / n as f64).truncate();
+                best = best.min(edges.segment_distance(prev, q, max));
+                prev = q;
+            }
+            best
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
