@@ -174,8 +174,15 @@ struct CommonOpts {
     /// Spiral: start at this point instead of the maximum of the pocket's implicit function.
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true, conflicts_with = "optimise")]
     spiral_start: Option<String>,
-    /// Spiral: choose ζ and the start point by simulating candidates and keeping the fastest
-    /// that clears the pocket within the engagement bound (paper 4 §4).
+    /// Spiral, ζ per level: the least gap between turns where they curve tightly, as a
+    /// fraction of the stepover (lower holds the engagement better in tight turns, and is
+    /// slower). Without it, floors from 0.5 down are simulated and the fastest within the
+    /// engagement bound is kept.
+    #[arg(long, value_name = "FRACTION", allow_negative_numbers = true, conflicts_with_all = ["optimise", "zeta"])]
+    spiral_floor: Option<f64>,
+    /// Spiral: choose the start point too (the maximum of the pocket's implicit function and
+    /// four points round it), simulating candidates and keeping the fastest that clears the
+    /// pocket within the engagement bound (paper 4 §4).
     #[arg(long)]
     optimise: bool,
     /// Arc-fitting tolerance, mm.
@@ -446,6 +453,7 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
             Some(t) => Some(pair(t)?),
             None => None,
         },
+        spiral_floor: o.spiral_floor,
         spiral_optimise: o.optimise,
         arc_tol: o.arc_tolerance,
         clearance: o.clearance,
@@ -455,6 +463,11 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
         && !(z.is_finite() && z > 0.0 && z <= 1.0)
     {
         return Err(swarf::Error::param("--zeta", format!("{z}: ζ must be in (0, 1]")).into());
+    }
+    if let Some(f) = o.spiral_floor
+        && !(f.is_finite() && f > 0.0 && f <= 1.0)
+    {
+        return Err(swarf::Error::param("--spiral-floor", format!("{f}: the floor must be in (0, 1]")).into());
     }
     if let Some(r) = o.res
         && !(r.is_finite() && r > 0.0)

@@ -246,6 +246,8 @@ fn other_bad_numbers() {
     expect_failure(&d, &c, &["--feed", "-100"], 2, &["feed", "positive"]);
     expect_failure(&d, &c, &["--ramp-angle", "90"], 2, &["--ramp-angle", "90"]);
     expect_failure(&d, &c, &["--res", "0"], 2, &["--res", "positive"]);
+    expect_failure(&d, &c, &["--strategy", "spiral", "--spiral-floor", "0"], 2, &["--spiral-floor", "(0, 1]"]);
+    expect_failure(&d, &c, &["--strategy", "spiral", "--zeta", "2"], 2, &["--zeta", "(0, 1]"]);
     // `--clearance -1` is taken by clap as an unknown flag (the option does not allow negative
     // numbers); `--clearance=-1` reaches swarf's own check
     expect_failure(&d, &c, &["--clearance=-1"], 2, &["--clearance", "positive"]);

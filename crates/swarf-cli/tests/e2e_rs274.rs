@@ -390,16 +390,19 @@ fn medial_grbl() {
     run_all_with("medial", "grbl", &["--res", "0.1"]);
 }
 
-/// The oscillator spiral (paper 4) on the three cases it is meant for (it refuses pockets with
-/// islands).
+/// The oscillator spiral (paper 4) on the three cases it is meant for, and on a pocket with an
+/// island (a spiral over the island-free core, adaptive passes for the rest).
 #[test]
 fn spiral_linuxcnc_and_grbl() {
     let Some(rs274) = rs274() else { return };
     let root = repo_root().join("examples/cases");
     let mut bad = Vec::new();
-    for (case, post) in
-        [("round_pocket.json", "linuxcnc"), ("square_pocket.json", "grbl"), ("l_pocket.json", "linuxcnc")]
-    {
+    for (case, post) in [
+        ("round_pocket.json", "linuxcnc"),
+        ("square_pocket.json", "grbl"),
+        ("l_pocket.json", "linuxcnc"),
+        ("boss_with_clamp.json", "grbl"),
+    ] {
         bad.extend(check_case(&rs274, &root.join(case), "spiral", post, &[]));
     }
     assert!(bad.is_empty(), "{bad:#?}");

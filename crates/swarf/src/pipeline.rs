@@ -243,16 +243,21 @@ pub fn plan(job: &Job, opts: &RoughOptions) -> Result<Option<Planned>> {
     } else if opts.params.strategy == strategy::StrategyKind::Medial {
         plan::medial::link_medial(job, &regions, &geom, &opts.params, &zs, &finish, &opts.sim)?
     } else if opts.params.strategy == strategy::StrategyKind::Spiral {
-        let choice = if opts.params.spiral_optimise {
-            let (best, trials) = optimise_spiral(job, &regions, &geom, opts, &zs)?;
-            if debug {
-                for t in &trials {
-                    eprintln!("spiral trial {t:?}");
+        let choice = match (opts.params.spiral_zeta, opts.params.spiral_floor) {
+            (None, None) => {
+                let (best, trials) = optimise_spiral(job, &regions, &geom, opts, &zs)?;
+                if debug {
+                    for t in &trials {
+                        eprintln!("spiral trial {t:?}");
+                    }
                 }
+                best
             }
-            best
-        } else {
-            plan::spiral::SpiralChoice { zeta: opts.params.spiral_zeta, start: opts.params.spiral_start }
+            (zeta, floor) => plan::spiral::SpiralChoice {
+                zeta,
+                start: opts.params.spiral_start,
+                floor: floor.unwrap_or(plan::spiral::ENGAGEMENT_FLOOR),
+            },
         };
         plan::spiral::link_spiral(job, &regions, &geom, &opts.params, &zs, &finish, &opts.sim, &choice)?
     } else {
@@ -270,11 +275,19 @@ pub fn example_job() -> Job {
     }
 }
 
-/// The loop of paper 4 §4 (Figs. 8–9): plans the spiral of every candidate of
-/// [`plan::spiral::candidates`] (ζ per level or constant, start points), simulates each on the
-/// raster model, and returns the fastest that clears the pocket (rest ≤ 0.5 % of the reachable
-/// area, no gouge) within the engagement bound (p99 outside the entry ≤ the reference + 10°),
-/// with every trial. When none does, the one that misses by least (rest first).
+/// The loop of paper 4 §4 (Figs. 8–9): chooses ζ (per level, through the floor of the gaps
+/// where turns are tight) and, with `opts.params.spiral_optimise`, the start point of a spiral
+/// to minimise machining time subject to full clearing (rest ≤ 0.5 % of the reachable area, no
+/// gouge) and the engagement bound (p99 outside the entry ≤ the reference + 10°), as swarf's
+/// simulator (`opts.sim`) judges them.
+///
+/// Every candidate of [`plan::spiral::candidates`] is planned (quick), and its time is read off
+/// its program. Simulation (the slow part) is spent only where it can change the answer: the
+/// candidates are simulated in order of time, fastest first, and the first feasible one is the
+/// optimum. A damping (floor) that broke the engagement bound from one start is not simulated
+/// from the others: the engagement depends on the damping far more than on the start. At most
+/// [`MAX_SIMULATED`] are simulated; when none of those is feasible, the one that misses by
+/// least (rest first, then engagement) is returned. Returns the choice and every trial.
 pub fn optimise_spiral(
     job: &Job,
     regions: &crate::model::Regions,
@@ -282,40 +295,177 @@ pub fn optimise_spiral(
     opts: &RoughOptions,
     zs: &[f64],
 ) -> Result<(plan::spiral::SpiralChoice, Vec<plan::spiral::Trial>)> {
+    use plan::spiral::Trial;
+    use rayon::prelude::*;
     let bound = job.width.engagement_deg() + 10.0;
-    let mut trials = Vec::new();
-    for choice in plan::spiral::candidates(job, regions, geom, &opts.params)? {
-        let mut tp = match plan::spiral::link_spiral(job, regions, geom, &opts.params, zs, &[], &opts.sim, &choice) {
-            Ok(tp) => tp,
-            Err(_) => {
-                trials.push(plan::spiral::Trial { choice, time_min: None, rest: 1.0, p99_deg: 180.0, feasible: false });
-                continue;
-            }
-        };
-        tp.quantize(post::COORD_STEP, post::CENTER_STEP);
-        let mut sim = crate::sim::raster::RasterSim::new(job, regions, &opts.sim)?;
-        let rp = sim.replay(&tp, &mut |_| {});
-        let mut rep = Report::default();
-        report::fill(&mut rep, &tp, &rp, &sim.rest(), job.rapid_rate);
-        let feasible = rep.rest_fraction <= 0.005 && rep.gouges == 0 && rep.engagement_deg.p99 <= bound;
-        trials.push(plan::spiral::Trial {
-            choice,
-            time_min: Some(rep.time_min),
-            rest: rep.rest_fraction,
-            p99_deg: rep.engagement_deg.p99,
-            feasible,
-        });
-    }
-    let best = trials
+    let p = &opts.params;
+    let candidates = plan::spiral::candidates(regions, geom, p.spiral_start, p.spiral_optimise)?;
+    let planned: Vec<Option<Toolpath>> =
+        candidates.par_iter().map(|c| plan_spiral_trial(job, regions, geom, opts, zs, c)).collect();
+    let mut trials: Vec<Trial> = candidates
         .iter()
-        .filter(|t| t.feasible)
-        .min_by(|a, b| a.time_min.unwrap_or(f64::MAX).total_cmp(&b.time_min.unwrap_or(f64::MAX)))
+        .zip(&planned)
+        .map(|(c, tp)| Trial {
+            choice: *c,
+            time_min: tp.as_ref().map(|tp| tp.totals(job.rapid_rate).time_min),
+            sim: None,
+        })
+        .collect();
+    let mut order: Vec<usize> = (0..trials.len()).filter(|&i| trials[i].time_min.is_some()).collect();
+    // (stable: equal times keep the candidates' order, so the result is deterministic)
+    order.sort_by(|&a, &b| trials[a].time_min.unwrap_or(f64::MAX).total_cmp(&trials[b].time_min.unwrap_or(f64::MAX)));
+    let mut best = None;
+    let mut simulated = 0;
+    for &i in &order {
+        if simulated == MAX_SIMULATED {
+            break;
+        }
+        let same_damping =
+            |t: &Trial| t.choice.zeta == trials[i].choice.zeta && t.choice.floor == trials[i].choice.floor;
+        if trials.iter().any(|t| same_damping(t) && t.sim.is_some_and(|s| s.p99_deg > bound)) {
+            continue;
+        }
+        let Some(tp) = &planned[i] else { continue };
+        simulated += 1;
+        let sim = judge_spiral(job, regions, opts, tp)?;
+        trials[i].sim = Some(sim);
+        if sim.feasible {
+            best = Some(i);
+            break;
+        }
+    }
+    let best = best
         .or_else(|| {
-            trials.iter().filter(|t| t.time_min.is_some()).min_by(|a, b| {
-                a.rest.total_cmp(&b.rest).then((a.p99_deg - bound).max(0.0).total_cmp(&(b.p99_deg - bound).max(0.0)))
+            let miss = |t: &Trial| t.sim.map_or((1.0, 180.0), |s| (s.rest, (s.p99_deg - bound).max(0.0)));
+            (0..trials.len()).filter(|&i| trials[i].sim.is_some()).min_by(|&a, &b| {
+                let ((ra, ea), (rb, eb)) = (miss(&trials[a]), miss(&trials[b]));
+                ra.total_cmp(&rb).then(ea.total_cmp(&eb))
             })
         })
-        .map(|t| t.choice)
         .ok_or_else(|| Error::param("--strategy spiral", "no spiral could be made from any start or ζ"))?;
-    Ok((best, trials))
+    Ok((trials[best].choice, trials))
+}
+
+/// [`optimise_spiral`] on a whole job (its regions, layer geometry and levels as [`plan`]
+/// makes them).
+pub fn optimise_spiral_job(
+    job: &Job,
+    opts: &RoughOptions,
+) -> Result<(plan::spiral::SpiralChoice, Vec<plan::spiral::Trial>)> {
+    let regions = job.regions(job.radius(), strategy::wall_margin(&opts.params))?;
+    let geom = LayerGeom::new(job, &regions, &opts.params)?;
+    optimise_spiral(job, &regions, &geom, opts, &job.levels())
+}
+
+/// The most candidates [`optimise_spiral`] simulates.
+pub const MAX_SIMULATED: usize = 8;
+
+/// The program of one spiral candidate, as it will be written (quantised), or `None` where
+/// the spiral cannot be made.
+fn plan_spiral_trial(
+    job: &Job,
+    regions: &crate::model::Regions,
+    geom: &LayerGeom,
+    opts: &RoughOptions,
+    zs: &[f64],
+    choice: &plan::spiral::SpiralChoice,
+) -> Option<Toolpath> {
+    let mut tp = plan::spiral::link_spiral(job, regions, geom, &opts.params, zs, &[], &opts.sim, choice).ok()?;
+    tp.quantize(post::COORD_STEP, post::CENTER_STEP);
+    Some(tp)
+}
+
+/// Simulates a spiral candidate and judges it by the optimiser's criteria.
+fn judge_spiral(
+    job: &Job,
+    regions: &crate::model::Regions,
+    opts: &RoughOptions,
+    tp: &Toolpath,
+) -> Result<plan::spiral::TrialSim> {
+    let (rp, rest) = crate::sim::simulate(job, regions, &opts.sim, tp, &mut |_| {})?;
+    let mut rep = Report::default();
+    report::fill(&mut rep, tp, &rp, &rest, job.rapid_rate);
+    let bound = job.width.engagement_deg() + 10.0;
+    Ok(plan::spiral::TrialSim {
+        rest: rep.rest_fraction,
+        p99_deg: rep.engagement_deg.p99,
+        feasible: rep.rest_fraction <= 0.005 && rep.gouges == 0 && rep.engagement_deg.p99 <= bound,
+    })
+}
+
+/// What [`spiral_study`] measured of one job.
+#[derive(Debug, Clone)]
+pub struct SpiralStudy {
+    /// The default of `rough`: the floor chosen from the maximum of f ([`optimise_spiral`]
+    /// without other starts), and its trials.
+    pub default: (plan::spiral::SpiralChoice, Vec<plan::spiral::Trial>),
+    /// `--optimise`: the floor and the start chosen, and the trials.
+    pub optimised: (plan::spiral::SpiralChoice, Vec<plan::spiral::Trial>),
+    /// The baseline: the largest feasible constant ζ ([`best_fixed_zeta`]).
+    pub fixed: Option<(f64, plan::spiral::Trial)>,
+}
+
+/// The comparison of the docs' table: the default spiral, the optimiser's choice with other
+/// starts, and the best constant ζ, each simulated and judged by the optimiser's criteria.
+/// Slow (minutes).
+pub fn spiral_study(job: &Job, opts: &RoughOptions) -> Result<SpiralStudy> {
+    let regions = job.regions(job.radius(), strategy::wall_margin(&opts.params))?;
+    let geom = LayerGeom::new(job, &regions, &opts.params)?;
+    let zs = job.levels();
+    let mut o = opts.clone();
+    o.params.spiral_optimise = false;
+    let default = optimise_spiral(job, &regions, &geom, &o, &zs)?;
+    o.params.spiral_optimise = true;
+    let optimised = optimise_spiral(job, &regions, &geom, &o, &zs)?;
+    let fixed = best_fixed_zeta(job, &regions, &geom, opts, &zs)?;
+    Ok(SpiralStudy { default, optimised, fixed })
+}
+
+/// The baseline of the optimiser: the largest constant ζ whose spiral (from the maximum of f)
+/// is feasible by the optimiser's criteria, found by simulation (doubling or halving from
+/// ζ = 0.02 to a bracket, then five geometric bisections; feasibility is taken as monotone in
+/// ζ, which a wider spiral breaks by leaving more rest or engaging more). Returns ζ and its
+/// trial, or `None` when no ζ down to 1e-4 is feasible. Slow (each try is simulated, and a
+/// small ζ makes a long program): for comparisons, not for planning.
+pub fn best_fixed_zeta(
+    job: &Job,
+    regions: &crate::model::Regions,
+    geom: &LayerGeom,
+    opts: &RoughOptions,
+    zs: &[f64],
+) -> Result<Option<(f64, plan::spiral::Trial)>> {
+    let try_z = |z: f64| -> Result<plan::spiral::Trial> {
+        let choice = plan::spiral::SpiralChoice { zeta: Some(z), ..Default::default() };
+        let tp = plan_spiral_trial(job, regions, geom, opts, zs, &choice);
+        let sim = match &tp {
+            Some(tp) => Some(judge_spiral(job, regions, opts, tp)?),
+            None => None,
+        };
+        Ok(plan::spiral::Trial { choice, time_min: tp.map(|tp| tp.totals(job.rapid_rate).time_min), sim })
+    };
+    let (mut lo, mut hi): (Option<(f64, plan::spiral::Trial)>, Option<f64>) = (None, None);
+    let mut z = 0.02;
+    while lo.is_none() || hi.is_none() {
+        let t = try_z(z)?;
+        if t.feasible() {
+            lo = Some((z, t));
+            if z >= 0.5 {
+                return Ok(lo);
+            }
+            z *= 2.0;
+        } else {
+            hi = Some(z);
+            if z < 1e-4 {
+                return Ok(None);
+            }
+            z *= 0.5;
+        }
+    }
+    for _ in 0..5 {
+        let (Some((l, _)), Some(h)) = (&lo, hi) else { break };
+        let m = (l * h).sqrt();
+        let t = try_z(m)?;
+        if t.feasible() { lo = Some((m, t)) } else { hi = Some(m) }
+    }
+    Ok(lo)
 }

@@ -413,6 +413,11 @@ fn flags(p: &Params, res: f64) -> String {
     s
 }
 
+/// The strategies that state an engagement bound.
+fn bounded(s: StrategyKind) -> bool {
+    matches!(s, StrategyKind::Adaptive | StrategyKind::Spiral)
+}
+
 /// Marks a problem with the engagement bound (as opposed to gouges, collisions, rest, plunges).
 const BOUND: &str = "bound: ";
 
@@ -427,7 +432,7 @@ fn run(case: &Case) -> (Vec<String>, String) {
         // (adaptive: every 0.1 mm, since its engagement percentiles are checked)
         sim: SimOptions {
             res: Some(case.res),
-            sample_step: Some(if case.params.strategy == StrategyKind::Adaptive { 0.1 } else { 0.5 }),
+            sample_step: Some(if bounded(case.params.strategy) { 0.1 } else { 0.5 }),
             ..Default::default()
         },
         simulate: true,
@@ -471,9 +476,9 @@ fn run(case: &Case) -> (Vec<String>, String) {
     if room && r.plunges != 0 {
         problems.push(format!("{} plunges although the pocket has room for a helix", r.plunges));
     }
-    // the adaptive strategy's stated bound, outside the entry bores: p99 within the reference
+    // the adaptive and spiral strategies' stated bound, outside the entry bores: p99 within the reference
     // + 10°, and under 0.5 % of the cutting time above the reference + 20°
-    if case.params.strategy == StrategyKind::Adaptive {
+    if bounded(case.params.strategy) {
         let e = &r.engagement_deg;
         if !(e.p99 <= r.engagement_ref_deg + 10.0) {
             problems.push(format!(
@@ -704,6 +709,15 @@ fn random_pocket_medial_known_rest() {
     let (problems, summary) = run(&case);
     eprintln!("{summary}");
     assert!(problems.len() == 1 && problems[0].starts_with("rest_fraction"), "{problems:?}");
+}
+
+// Oscillator spirals (paper 4): 40 closed pockets with islands (seeds 9000..9040), so each
+// one is a spiral over the island-free core and adaptive passes for the rest. Every job must
+// be clean and within the engagement bound, as for adaptive.
+
+#[test]
+fn random_pockets_spiral() {
+    parallel("pockets/spiral", 9000..9040, StrategyKind::Spiral);
 }
 
 #[test]

@@ -1,8 +1,10 @@
 //! The oscillator spiral (paper 4) on the example cases it is meant for: clean by swarf's own
 //! simulator (no gouge, no rapid collision, no plunge, rest under 0.5 % of the reachable area),
 //! one entry and no retract before the end, tangent-continuous wherever it cuts (no turn above
-//! 1° in the planned path, 5° once written to 1 µm), all arcs; and within the engagement bound on the two cases whose
-//! shape has no ridge. A pocket with an island is refused with a message.
+//! 1° in the planned path, 2° once written to 1 µm), all arcs, and within the engagement bound
+//! (p99 ≤ reference + 10°). A pocket with islands gets a spiral over its island-free core and
+//! adaptive passes for the rest, clean and within the bound. The optimiser's choice is feasible
+//! and no faster candidate is.
 
 use std::path::Path;
 use swarf::pipeline::{RoughOptions, rough};
@@ -20,7 +22,7 @@ fn case(name: &str) -> swarf::model::Job {
 #[test]
 fn spirals_are_clean_smooth_and_in_one_piece() {
     let mut bad = Vec::new();
-    for (name, bounded) in [("round_pocket.json", true), ("square_pocket.json", true), ("l_pocket.json", false)] {
+    for name in ["round_pocket.json", "square_pocket.json", "l_pocket.json"] {
         let job = case(name);
         for climb in [true, false] {
             let opts = RoughOptions {
@@ -52,8 +54,8 @@ fn spirals_are_clean_smooth_and_in_one_piece() {
                 bad.push(format!("{what}: {rises} rises before the end"));
             }
             // tangent-continuous as planned; the written program rounds coordinates to 1 µm,
-            // which tilts the shortest arcs (where the last turn rounds a corner of the region
-            // at a radius of hundredths of a millimetre) by a few degrees
+            // which tilts the ends of the shortest arcs (a few hundredths of a millimetre long,
+            // in the tight tips of the levels along an L's legs) by up to 2°
             let planned = swarf::pipeline::plan(&job, &opts).unwrap_or_else(|e| panic!("{e}")).expect("a program");
             let turns = planned.toolpath.cutting_turns();
             assert!(turns.len() > 20, "{what}: {} junctions", turns.len());
@@ -62,7 +64,7 @@ fn spirals_are_clean_smooth_and_in_one_piece() {
                 bad.push(format!("{what}: a turn of {worst:.2}° between planned cutting moves"));
             }
             let written = tp.cutting_turns().iter().map(|t| t.1).fold(0.0, f64::max);
-            if written > 5.0 {
+            if written > 2.0 {
                 bad.push(format!("{what}: a turn of {written:.2}° between written cutting moves"));
             }
             let lines = tp.moves.iter().filter(|m| m.kind == MoveKind::Cut && m.motion == Motion::Line).count();
@@ -70,7 +72,7 @@ fn spirals_are_clean_smooth_and_in_one_piece() {
                 bad.push(format!("{what}: {lines} straight cutting moves"));
             }
             let bound = job.width.engagement_deg() + 10.0;
-            if bounded && !(r.engagement_deg.p99 <= bound) {
+            if !(r.engagement_deg.p99 <= bound) {
                 bad.push(format!("{what}: p99 engagement {:.1}° above {bound}°", r.engagement_deg.p99));
             }
         }
@@ -78,15 +80,72 @@ fn spirals_are_clean_smooth_and_in_one_piece() {
     assert!(bad.is_empty(), "{bad:#?}");
 }
 
+// (the negated comparisons make NaN fail)
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 #[test]
-fn a_pocket_with_an_island_is_refused_with_a_reason() {
-    let job = case("pocket_islands.json");
+fn pockets_with_islands_get_a_spiral_core_and_adaptive_passes() {
+    let mut bad = Vec::new();
+    for name in ["pocket_islands.json", "boss_with_clamp.json"] {
+        let job = case(name);
+        let opts = RoughOptions {
+            input_name: name.into(),
+            params: Params { strategy: StrategyKind::Spiral, ..Params::default() },
+            sim: SimOptions { res: Some(0.1), ..Default::default() },
+            ..Default::default()
+        };
+        let out = rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let r = &out.report;
+        if r.gouges != 0 || r.rapid_collisions != 0 || r.plunges != 0 {
+            bad.push(format!(
+                "{name}: {} gouges, {} rapid collisions, {} plunges",
+                r.gouges, r.rapid_collisions, r.plunges
+            ));
+        }
+        if !(r.rest_fraction < 0.005) {
+            bad.push(format!("{name}: rest {:.4} of the reachable area", r.rest_fraction));
+        }
+        let bound = job.width.engagement_deg() + 10.0;
+        if !(r.engagement_deg.p99 <= bound) {
+            bad.push(format!("{name}: p99 engagement {:.1}° above {bound}°", r.engagement_deg.p99));
+        }
+        // the spiral is there, and says what follows it
+        if !out.gcode.contains("spiral over the island-free core") {
+            bad.push(format!("{name}: no spiral core in the program"));
+        }
+        let arcs = out.toolpath.moves.iter().filter(|m| m.kind == MoveKind::Cut && m.motion != Motion::Line).count();
+        if arcs < 100 {
+            bad.push(format!("{name}: only {arcs} cutting arcs"));
+        }
+    }
+    assert!(bad.is_empty(), "{bad:#?}");
+}
+
+#[test]
+fn the_optimiser_keeps_the_fastest_feasible_spiral() {
+    let job = case("l_pocket.json");
     let opts = RoughOptions {
         params: Params { strategy: StrategyKind::Spiral, ..Params::default() },
-        simulate: false,
+        sim: SimOptions { res: Some(0.1), ..Default::default() },
         ..Default::default()
     };
-    let e = rough(&job, &opts, &mut |_, _| {}).expect_err("an island");
-    let msg = e.to_string();
-    assert!(msg.contains("island") && msg.contains("--strategy"), "{msg}");
+    let study = swarf::pipeline::optimise_spiral_job(&job, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let (choice, trials) = &study;
+    let chosen = trials.iter().find(|t| t.choice == *choice).expect("the choice is a trial");
+    assert!(chosen.feasible(), "{chosen:?}");
+    let t_best = chosen.time_min.expect("a time");
+    for t in trials {
+        let Some(time) = t.time_min else { continue };
+        if time < t_best {
+            // a faster candidate was simulated and failed, or shares a damping that failed
+            let failed = |u: &swarf::plan::spiral::Trial| u.sim.is_some_and(|s| !s.feasible);
+            let pruned =
+                trials.iter().any(|u| u.choice.floor == t.choice.floor && u.choice.zeta == t.choice.zeta && failed(u));
+            assert!(failed(t) || pruned, "a faster candidate was passed over: {t:?}");
+        }
+    }
+    // on an L the widest floor breaks the bound (the tips of the levels along its legs), so
+    // the optimiser had something to do
+    let widest = trials.iter().find(|t| t.choice.floor == 0.5 && t.choice.start.is_none()).expect("floor 0.5");
+    assert!(widest.sim.is_some_and(|s| !s.feasible), "{widest:?}");
+    assert!(choice.floor < 0.5);
 }

@@ -129,15 +129,33 @@ pub fn link_adaptive(
     finish: &[(f64, Vec<Pass>)],
     sim_opts: &SimOptions,
 ) -> Result<Toolpath> {
-    let t0 = std::time::Instant::now();
     let first = geom.centres.bounds().map_or(DVec2::ZERO, |(lo, _)| lo);
     let mut l = Linker::new(job, regions, params, sim_opts, first)?;
+    adaptive_levels(&mut l, job, geom, params, zs, &mut |_, _| {});
+    l.finishing(finish);
+    Ok(l.finish())
+}
+
+/// The adaptive clearing of every level in `zs`, after `before` has cut what it cuts at that
+/// level (nothing for plain adaptive; the spiral over a pocket's island-free core for the
+/// spiral strategy on a pocket with islands): the constant-engagement passes start from what
+/// the material model says is left.
+pub(super) fn adaptive_levels<'a>(
+    l: &mut Linker<'a>,
+    job: &Job,
+    geom: &LayerGeom,
+    params: &Params,
+    zs: &[f64],
+    before: &mut dyn FnMut(&mut Linker<'a>, f64),
+) {
+    let t0 = std::time::Instant::now();
     l.clear_margin = 0.75 * l.sim.grid.res;
-    let mut eng = Engine::new(&mut l, job, geom, params);
+    let mut eng = Engine::new(l, job, geom, params);
     let n = zs.len();
     for (i, z) in zs.iter().enumerate() {
         eng.l.tp.note(format!("level {} of {}: z {:.3}", i + 1, n, z));
         eng.l.down_at = None;
+        before(eng.l, *z);
         eng.level(*z);
         if std::env::var("SWARF_DEBUG").is_ok() {
             eprintln!("adaptive level {} done at {:.3} s", i + 1, t0.elapsed().as_secs_f64());
@@ -168,8 +186,6 @@ pub fn link_adaptive(
     if std::env::var("SWARF_DEBUG").is_ok() {
         eprintln!("adaptive clean-up done at {:.3} s", t0.elapsed().as_secs_f64());
     }
-    eng.l.finishing(finish);
-    Ok(l.finish())
 }
 
 /// The offset contours along the walls (followed in either direction: the one that keeps the

@@ -25,8 +25,13 @@ pub const LANDING_MARGIN: f64 = 0.02;
 /// How much farther than its radius the tool axis stays from the walls (mm): the arc-fitting
 /// tolerance plus a micrometre, so that no fitted arc comes closer than the radius.
 pub fn wall_margin(params: &Params) -> f64 {
-    // adaptive passes are also simplified (Douglas–Peucker) before arc fitting
-    let dp = if params.strategy == StrategyKind::Adaptive { crate::plan::adaptive::DP_TOL } else { 0.0 };
+    // adaptive passes are also simplified (Douglas–Peucker) before arc fitting (and a spiral
+    // over a pocket with islands leaves the rest to adaptive passes)
+    let dp = if matches!(params.strategy, StrategyKind::Adaptive | StrategyKind::Spiral) {
+        crate::plan::adaptive::DP_TOL
+    } else {
+        0.0
+    };
     params.arc_tol + 0.001 + dp
 }
 
@@ -140,7 +145,14 @@ pub struct Params {
     pub spiral_zeta: Option<f64>,
     /// Spiral: start here instead of at the maximum of the region's implicit function.
     pub spiral_start: Option<crate::geom::DVec2>,
-    /// Spiral: choose ζ and the start point by simulating candidates (paper 4 §4, Figs. 8–9).
+    /// Spiral, ζ per level: the least gap between turns the engagement limit may ask for where
+    /// turns curve tightly, as a fraction of the stepover
+    /// ([`crate::implicit::oscillator::EngagementLimit::floor`]); `None` (the default) tries
+    /// [`crate::plan::spiral::FLOORS`] and keeps the fastest within the engagement bound
+    /// ([`crate::pipeline::optimise_spiral`]).
+    pub spiral_floor: Option<f64>,
+    /// Spiral: also try four other start points round the maximum of f (paper 4 §4, Figs.
+    /// 8–9); the floor is chosen by simulation unless `spiral_floor` or `spiral_zeta` is set.
     pub spiral_optimise: bool,
 }
 
@@ -169,6 +181,7 @@ impl Default for Params {
             medial_cut_back: true,
             spiral_zeta: None,
             spiral_start: None,
+            spiral_floor: None,
             spiral_optimise: false,
         }
     }
