@@ -228,33 +228,48 @@ impl Toolpath {
     /// next begins. Rapids break the chain; moves without XY motion (straight descents) are
     /// stepped over. A tangent-continuous (C1) program reads 0 everywhere.
     pub fn cutting_turns(&self) -> Vec<(usize, f64)> {
+        self.cutting_turns_at(0.0)
+    }
+
+    /// [`Self::cutting_turns`] as the path looks at the length scale `scale` (mm), as a
+    /// controller's look-ahead or a simulator's grid sees it: a run of moves each no longer
+    /// than `scale` (in XY) counts as the chords from its start to the first point more than
+    /// `scale` away, and so on (a rest of the run shorter than that adds its turn to the next
+    /// junction). A run of tiny arcs round a tight bend reads as a polygon, its turns those of
+    /// the chords; a C1 program of moves longer than `scale` still reads 0 everywhere.
+    pub fn cutting_turns_at(&self, scale: f64) -> Vec<(usize, f64)> {
         let mut out = Vec::new();
         let mut last: Option<DVec2> = None;
+        // the start of the run of short moves not yet taken into a chord
+        let mut run: Option<DVec2> = None;
         for (i, (from, m)) in self.segments().enumerate() {
             if m.is_rapid() {
                 last = None;
+                run = None;
                 continue;
             }
             let (a, b) = (from.truncate(), m.to.truncate());
-            let (t0, t1) = match m.motion {
-                Motion::Line => {
-                    let d = b - a;
-                    if d.length() < 1e-9 {
-                        continue;
+            let len = move_xy_length(from, m);
+            if len < 1e-9 {
+                continue;
+            }
+            let (t0, t1) = if len > scale {
+                run = None;
+                match m.motion {
+                    Motion::Line => ((b - a).normalize(), (b - a).normalize()),
+                    Motion::Arc { center, ccw } => {
+                        let g = ArcGeom::new(from, m.to, center, ccw);
+                        (g.tangent(0.0), g.tangent(1.0))
                     }
-                    (d.normalize(), d.normalize())
                 }
-                Motion::Arc { center, ccw } => {
-                    let s = if ccw { 1.0 } else { -1.0 };
-                    let tan = |p: DVec2| {
-                        let r = (p - center).normalize_or_zero();
-                        DVec2::new(-r.y, r.x) * s
-                    };
-                    if (b - a).length() < 1e-9 && (a - center).length() < 1e-9 {
-                        continue;
-                    }
-                    (tan(a), tan(b))
+            } else {
+                let start = *run.get_or_insert(a);
+                let chord = b - start;
+                if chord.length() <= scale {
+                    continue;
                 }
+                run = None;
+                (chord.normalize(), chord.normalize())
             };
             if let Some(prev) = last {
                 out.push((i, prev.dot(t0).clamp(-1.0, 1.0).acos().to_degrees()));
@@ -362,5 +377,41 @@ mod tests {
         assert!((t.rapid_length_mm - 6.0).abs() < 1e-9);
         assert_eq!(t.entries, 1);
         assert_eq!(t.retracts, 1);
+    }
+
+    /// A line along x, a quarter turn to the left round a centre at `(5, r)` made of `k` equal
+    /// arcs, and a line up along y.
+    fn bend(r: f64, k: usize) -> Toolpath {
+        let mut tp = Toolpath::new(Tool::flat(6.0), DVec3::new(0.0, 0.0, 0.0), 5.0);
+        tp.line(MoveKind::Cut, DVec3::new(5.0, 0.0, 0.0), 500.0);
+        let c = DVec2::new(5.0, r);
+        for i in 1..=k {
+            let a = -std::f64::consts::FRAC_PI_2 + std::f64::consts::FRAC_PI_2 * i as f64 / k as f64;
+            tp.arc(MoveKind::Cut, (c + DVec2::new(a.cos(), a.sin()) * r).extend(0.0), c, true, 500.0);
+        }
+        tp.line(MoveKind::Cut, DVec3::new(5.0 + r, r + 5.0, 0.0), 500.0);
+        tp
+    }
+
+    #[test]
+    fn runs_of_tiny_arcs_read_as_chords_at_a_coarser_scale() {
+        let worst = |t: Vec<(usize, f64)>| t.iter().map(|x| x.1).fold(0.0, f64::max);
+        // nine arcs of 10° on a radius of 0.15 mm (0.026 mm each): C1, yet a polygon at 0.1 mm
+        let tiny = bend(0.15, 9);
+        assert!(worst(tiny.cutting_turns()) < 1e-6);
+        assert_eq!(worst(tiny.cutting_turns_at(0.0)), worst(tiny.cutting_turns()));
+        let coarse = tiny.cutting_turns_at(0.1);
+        assert!(worst(coarse.clone()) >= 29.0, "{coarse:?}");
+        // the same bend as one arc of 0.24 mm is smooth at that scale
+        let one = bend(0.15, 1);
+        assert!(worst(one.cutting_turns_at(0.1)) < 1e-6, "{:?}", one.cutting_turns_at(0.1));
+        // a rapid breaks the chain (the move along -x after it turns from nothing), and the
+        // descent without XY motion is stepped over
+        let mut broken = bend(0.15, 1);
+        broken.rapid(DVec3::new(0.0, 0.0, 5.0));
+        broken.line(MoveKind::Cut, DVec3::new(0.0, 0.0, 0.0), 500.0);
+        broken.line(MoveKind::Cut, DVec3::new(-3.0, 0.0, 0.0), 500.0);
+        let t = broken.cutting_turns_at(0.1);
+        assert!(t.len() == 2 && worst(t.clone()) < 1e-6, "{t:?}");
     }
 }

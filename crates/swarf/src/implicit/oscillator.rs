@@ -193,6 +193,9 @@ pub struct SpiralPoint {
     pub p: DVec2,
     /// `f` there.
     pub f: f64,
+    /// The unit tangent there (the direction field of the integration; at the start point,
+    /// where it is undefined, the one at the next point).
+    pub t: DVec2,
 }
 
 /// A spiral: the start point, the accepted integration points out to `f_end`, then one turn
@@ -395,7 +398,7 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64)
     if !(fy > opts.f_end) {
         return Err(Error::param("spiral", "the start offset already leaves the region"));
     }
-    let mut points = vec![SpiralPoint { p: start, f: f0 }, SpiralPoint { p: y, f: fy }];
+    let mut points = vec![SpiralPoint { p: start, f: f0, t: k1 }, SpiralPoint { p: y, f: fy, t: k1 }];
     let mut thetas = vec![0.0, 0.0];
     let mut theta = 0.0;
     let mut h = (eps / 10.0).min(h_max);
@@ -466,7 +469,7 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64)
             // the direction at the switch is the tracking one
             k1 = rhs.dir(y, track)?.0;
             track_dir = k1;
-            points.push(SpiralPoint { p: y, f: fy });
+            points.push(SpiralPoint { p: y, f: fy, t: k1 });
             thetas.push(theta);
             tracking = Some((points.len() - 1, theta));
             continue;
@@ -484,7 +487,7 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64)
             {
                 let frac = (sa / (sa - sb)).clamp(0.0, 1.0);
                 let t = dp_step(&mut rhs, y, k1, h * frac, track)?;
-                points.push(SpiralPoint { p: t.y, f: t.f_end });
+                points.push(SpiralPoint { p: t.y, f: t.f_end, t: t.k_end });
                 thetas.push(theta + turn * frac);
                 length += h * frac;
                 break;
@@ -508,7 +511,7 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64)
         y = s.y;
         fy = s.f_end;
         k1 = s.k_end;
-        points.push(SpiralPoint { p: y, f: fy });
+        points.push(SpiralPoint { p: y, f: fy, t: k1 });
         thetas.push(theta);
         if tracking.is_none() && theta >= last_turn.0 + std::f64::consts::TAU {
             if !(fy < last_turn.1 - 1e-12 * (f0 - opts.f_end).abs()) {

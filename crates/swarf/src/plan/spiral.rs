@@ -15,8 +15,15 @@
 //!    are at most a stepover apart and, where a turn curves tightly, no further apart than
 //!    keeps the engagement at the reference ([`crate::implicit::oscillator::engagement_spacing`]).
 //!    It ends with one turn along the level `f = TRACK_LEVEL` (a few µm inside the boundary).
-//! 3. **Output**: the integrated polyline is written as biarcs within the arc tolerance
-//!    ([`crate::geom::biarc`]), so the program is G2/G3 arcs meeting tangentially throughout.
+//! 3. **Output**: the integrated polyline, with the integrator's own tangent at each point,
+//!    is written as biarcs within the arc tolerance ([`crate::geom::biarc`]), so the program
+//!    is G2/G3 arcs meeting tangentially throughout. Where the levels bend tightly (the
+//!    rounded corners of a polygonal region, and the turns just inside them) arcs within the
+//!    tolerance are a few hundredths of a millimetre long, and a run of them reads as a
+//!    polygon at the scale of a controller's look-ahead or a simulator's grid. There a biarc
+//!    is widened until its arcs are at least [`MIN_ARC`] long, if it then cuts the bend
+//!    inwards by at most [`CORNER_CUT`] and strays outwards by no more than the tolerance: it
+//!    comes no nearer the walls than the tolerance already allows.
 //!
 //! **What the method cannot do, and what is done instead.** A spiral covers a simply connected
 //! region: with an island, the levels of `f` split round it, and the trajectory cannot follow
@@ -64,6 +71,13 @@ pub const CORNER_RADIUS: f64 = 0.25;
 /// Points of the integrated spiral closer than this, mm, to the one kept before are dropped
 /// before the biarcs are fitted.
 pub const MIN_POINT_GAP: f64 = 0.01;
+
+/// Shortest chord wanted of a written arc, mm (see [`biarc::Tolerance::min_len`]).
+pub const MIN_ARC: f64 = 0.12;
+
+/// How far a written arc may cut inside the integrated spiral where it is widened to
+/// [`MIN_ARC`], mm (outwards it keeps to the arc tolerance).
+pub const CORNER_CUT: f64 = 0.02;
 
 /// The least gap between turns, as a fraction of the stepover, that the engagement limit may
 /// ask for in a spiral made with a constant ζ or a [`SpiralChoice::default`] (see
@@ -358,24 +372,26 @@ fn cut_piece(l: &mut Linker, p: &PiecePath, z: f64) {
     // points closer than MIN_POINT_GAP to the one before are dropped (the last one is kept
     // and its predecessor dropped instead): a biarc between two such points is a few µm
     // long, and once written to 1 µm its ends point anywhere
-    let all = p.spiral.polyline();
+    let all = &p.spiral.points;
     let mut pts: Vec<DVec2> = Vec::with_capacity(all.len());
+    let mut tan: Vec<DVec2> = Vec::with_capacity(all.len());
     let mut k = 0;
     for (i, q) in all.iter().enumerate() {
         if let Some(last) = pts.last()
-            && (*q - *last).length() < MIN_POINT_GAP
+            && (q.p - *last).length() < MIN_POINT_GAP
         {
             if i + 1 < all.len() || pts.len() < 2 {
                 continue;
             }
             pts.pop();
+            tan.pop();
         }
         if i <= p.join {
             k = pts.len();
         }
-        pts.push(*q);
+        pts.push(q.p);
+        tan.push(q.t);
     }
-    let tan = biarc::tangents(&pts);
     let k = k.min(pts.len() - 1);
     let target = pts[k];
     // the helix ends a sixth of a turn before the angle of the join point
@@ -396,7 +412,14 @@ fn cut_piece(l: &mut Linker, p: &PiecePath, z: f64) {
         Some(b) => pieces.extend(b),
         None => pieces.push(Piece::Line { to: target }),
     }
-    pieces.extend(biarc::fit(&pts[k..], &tan[k..], l.params.arc_tol));
+    let tol = biarc::Tolerance {
+        tol: l.params.arc_tol,
+        min_len: MIN_ARC,
+        loose: CORNER_CUT,
+        // the biarcs may cut a bend inwards (towards the start), never outwards
+        side: -s,
+    };
+    pieces.extend(biarc::fit(&pts[k..], &tan[k..], tol));
     let feed = l.feed;
     for piece in pieces {
         match piece {
