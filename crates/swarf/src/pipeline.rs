@@ -243,23 +243,50 @@ pub fn plan(job: &Job, opts: &RoughOptions) -> Result<Option<Planned>> {
     } else if opts.params.strategy == strategy::StrategyKind::Medial {
         plan::medial::link_medial(job, &regions, &geom, &opts.params, &zs, &finish, &opts.sim)?
     } else if opts.params.strategy == strategy::StrategyKind::Spiral {
-        let choice = match (opts.params.spiral_zeta, opts.params.spiral_floor) {
+        let mut missed = None;
+        let (choice, planned) = match (opts.params.spiral_zeta, opts.params.spiral_floor) {
             (None, None) => {
-                let (best, trials) = optimise_spiral(job, &regions, &geom, opts, &zs)?;
+                let (best, trials, planned) = optimise_spiral_planned(job, &regions, &geom, opts, &zs)?;
                 if debug {
                     for t in &trials {
                         eprintln!("spiral trial {t:?}");
                     }
                 }
-                best
+                if let Some(t) = trials.iter().find(|t| t.choice == best)
+                    && let Some(sim) = t.sim.filter(|s| !s.feasible)
+                {
+                    missed = Some(format!(
+                        "no spiral candidate was clean within the engagement bound in simulation; \
+                         the nearest is kept: floor {:.2}, {} gouges, rest {:.2} %, p99 {:.0} deg \
+                         against a bound of {:.0}",
+                        best.floor,
+                        sim.gouges,
+                        100.0 * sim.rest,
+                        sim.p99_deg,
+                        job.width.engagement_deg() + 10.0
+                    ));
+                }
+                (best, planned)
             }
-            (zeta, floor) => plan::spiral::SpiralChoice {
-                zeta,
-                start: opts.params.spiral_start,
-                floor: floor.unwrap_or(plan::spiral::ENGAGEMENT_FLOOR),
-            },
+            (zeta, floor) => (
+                plan::spiral::SpiralChoice {
+                    zeta,
+                    start: opts.params.spiral_start,
+                    floor: floor.unwrap_or(plan::spiral::ENGAGEMENT_FLOOR),
+                },
+                None,
+            ),
         };
-        plan::spiral::link_spiral(job, &regions, &geom, &opts.params, &zs, &finish, &opts.sim, &choice)?
+        // the optimiser's program of the choice is the one wanted, unless finishing passes
+        // follow it
+        let mut tp = match planned {
+            Some(tp) if finish.is_empty() => tp,
+            _ => plan::spiral::link_spiral(job, &regions, &geom, &opts.params, &zs, &finish, &opts.sim, &choice)?,
+        };
+        if let Some(text) = missed {
+            tp.notes.insert(0, crate::toolpath::Note { at: 0, text });
+        }
+        tp
     } else {
         plan::link(job, &regions, &opts.params, &levels, &finish, &opts.sim)?
     };
@@ -287,7 +314,9 @@ pub fn example_job() -> Job {
 /// optimum. A damping (floor) that broke the engagement bound from one start is not simulated
 /// from the others: the engagement depends on the damping far more than on the start. At most
 /// [`MAX_SIMULATED`] are simulated; when none of those is feasible, the one that misses by
-/// least (rest first, then engagement) is returned. Returns the choice and every trial.
+/// least is returned (fewest gouges, then least rest beyond the limit, then least engagement
+/// beyond the bound), and [`plan`] says so in the program. Returns the choice and every
+/// trial.
 pub fn optimise_spiral(
     job: &Job,
     regions: &crate::model::Regions,
@@ -295,19 +324,30 @@ pub fn optimise_spiral(
     opts: &RoughOptions,
     zs: &[f64],
 ) -> Result<(plan::spiral::SpiralChoice, Vec<plan::spiral::Trial>)> {
+    optimise_spiral_planned(job, regions, geom, opts, zs).map(|(choice, trials, _)| (choice, trials))
+}
+
+/// [`optimise_spiral`], with the program of the choice as planned (without finishing passes).
+fn optimise_spiral_planned(
+    job: &Job,
+    regions: &crate::model::Regions,
+    geom: &LayerGeom,
+    opts: &RoughOptions,
+    zs: &[f64],
+) -> Result<(plan::spiral::SpiralChoice, Vec<plan::spiral::Trial>, Option<Toolpath>)> {
     use plan::spiral::Trial;
     use rayon::prelude::*;
     let bound = job.width.engagement_deg() + 10.0;
     let p = &opts.params;
     let candidates = plan::spiral::candidates(regions, geom, p.spiral_start, p.spiral_optimise)?;
-    let planned: Vec<Option<Toolpath>> =
+    let mut planned: Vec<Option<(Toolpath, Toolpath)>> =
         candidates.par_iter().map(|c| plan_spiral_trial(job, regions, geom, opts, zs, c)).collect();
     let mut trials: Vec<Trial> = candidates
         .iter()
         .zip(&planned)
         .map(|(c, tp)| Trial {
             choice: *c,
-            time_min: tp.as_ref().map(|tp| tp.totals(job.rapid_rate).time_min),
+            time_min: tp.as_ref().map(|(_, written)| written.totals(job.rapid_rate).time_min),
             sim: None,
         })
         .collect();
@@ -325,7 +365,7 @@ pub fn optimise_spiral(
         if trials.iter().any(|t| same_damping(t) && t.sim.is_some_and(|s| s.p99_deg > bound)) {
             continue;
         }
-        let Some(tp) = &planned[i] else { continue };
+        let Some((_, tp)) = &planned[i] else { continue };
         simulated += 1;
         let sim = judge_spiral(job, regions, opts, tp)?;
         trials[i].sim = Some(sim);
@@ -335,15 +375,21 @@ pub fn optimise_spiral(
         }
     }
     let best = best
-        .or_else(|| {
-            let miss = |t: &Trial| t.sim.map_or((1.0, 180.0), |s| (s.rest, (s.p99_deg - bound).max(0.0)));
-            (0..trials.len()).filter(|&i| trials[i].sim.is_some()).min_by(|&a, &b| {
-                let ((ra, ea), (rb, eb)) = (miss(&trials[a]), miss(&trials[b]));
-                ra.total_cmp(&rb).then(ea.total_cmp(&eb))
-            })
-        })
+        .or_else(|| nearest_miss(&trials, bound))
         .ok_or_else(|| Error::param("--strategy spiral", "no spiral could be made from any start or ζ"))?;
-    Ok((trials[best].choice, trials))
+    Ok((trials[best].choice, trials, planned.swap_remove(best).map(|(tp, _)| tp)))
+}
+
+/// Of the simulated trials, the one that missed by least: fewest gouges, then least rest
+/// beyond [`REST_LIMIT`], then least p99 engagement beyond `bound` (rest within the limit is
+/// not traded against engagement). The first of equals.
+fn nearest_miss(trials: &[plan::spiral::Trial], bound: f64) -> Option<usize> {
+    let miss =
+        |i: usize| trials[i].sim.map(|s| (s.gouges, (s.rest - REST_LIMIT).max(0.0), (s.p99_deg - bound).max(0.0)));
+    (0..trials.len())
+        .filter_map(|i| miss(i).map(|m| (i, m)))
+        .min_by(|(_, (ga, ra, ea)), (_, (gb, rb, eb))| ga.cmp(gb).then(ra.total_cmp(rb)).then(ea.total_cmp(eb)))
+        .map(|(i, _)| i)
 }
 
 /// [`optimise_spiral`] on a whole job (its regions, layer geometry and levels as [`plan`]
@@ -360,8 +406,11 @@ pub fn optimise_spiral_job(
 /// The most candidates [`optimise_spiral`] simulates.
 pub const MAX_SIMULATED: usize = 8;
 
-/// The program of one spiral candidate, as it will be written (quantised), or `None` where
-/// the spiral cannot be made.
+/// The most rest [`optimise_spiral`] accepts, as a share of the reachable area.
+pub const REST_LIMIT: f64 = 0.005;
+
+/// The program of one spiral candidate as planned and as it will be written (quantised), or
+/// `None` where the spiral cannot be made.
 fn plan_spiral_trial(
     job: &Job,
     regions: &crate::model::Regions,
@@ -369,10 +418,11 @@ fn plan_spiral_trial(
     opts: &RoughOptions,
     zs: &[f64],
     choice: &plan::spiral::SpiralChoice,
-) -> Option<Toolpath> {
-    let mut tp = plan::spiral::link_spiral(job, regions, geom, &opts.params, zs, &[], &opts.sim, choice).ok()?;
-    tp.quantize(post::COORD_STEP, post::CENTER_STEP);
-    Some(tp)
+) -> Option<(Toolpath, Toolpath)> {
+    let tp = plan::spiral::link_spiral(job, regions, geom, &opts.params, zs, &[], &opts.sim, choice).ok()?;
+    let mut written = tp.clone();
+    written.quantize(post::COORD_STEP, post::CENTER_STEP);
+    Some((tp, written))
 }
 
 /// Simulates a spiral candidate and judges it by the optimiser's criteria.
@@ -387,9 +437,10 @@ fn judge_spiral(
     report::fill(&mut rep, tp, &rp, &rest, job.rapid_rate);
     let bound = job.width.engagement_deg() + 10.0;
     Ok(plan::spiral::TrialSim {
+        gouges: rep.gouges,
         rest: rep.rest_fraction,
         p99_deg: rep.engagement_deg.p99,
-        feasible: rep.rest_fraction <= 0.005 && rep.gouges == 0 && rep.engagement_deg.p99 <= bound,
+        feasible: rep.rest_fraction <= REST_LIMIT && rep.gouges == 0 && rep.engagement_deg.p99 <= bound,
     })
 }
 
@@ -436,7 +487,7 @@ pub fn best_fixed_zeta(
 ) -> Result<Option<(f64, plan::spiral::Trial)>> {
     let try_z = |z: f64| -> Result<plan::spiral::Trial> {
         let choice = plan::spiral::SpiralChoice { zeta: Some(z), ..Default::default() };
-        let tp = plan_spiral_trial(job, regions, geom, opts, zs, &choice);
+        let tp = plan_spiral_trial(job, regions, geom, opts, zs, &choice).map(|(_, written)| written);
         let sim = match &tp {
             Some(tp) => Some(judge_spiral(job, regions, opts, tp)?),
             None => None,
@@ -468,4 +519,40 @@ pub fn best_fixed_zeta(
         if t.feasible() { lo = Some((m, t)) } else { hi = Some(m) }
     }
     Ok(lo)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use plan::spiral::{SpiralChoice, Trial, TrialSim};
+
+    fn trial(floor: f64, sim: Option<(usize, f64, f64)>) -> Trial {
+        Trial {
+            choice: SpiralChoice { zeta: None, start: None, floor },
+            time_min: Some(1.0),
+            sim: sim.map(|(gouges, rest, p99_deg)| TrialSim { gouges, rest, p99_deg, feasible: false }),
+        }
+    }
+
+    #[test]
+    fn the_nearest_miss_is_clean_first_then_within_the_bound() {
+        // rests under the limit are equal: the least engagement wins, not the least rest
+        let t = [
+            trial(0.5, Some((0, 0.0020, 90.0))),
+            trial(0.42, None),
+            trial(0.35, Some((0, 0.0031, 75.0))),
+            trial(0.28, Some((0, 0.0019, 80.0))),
+        ];
+        assert_eq!(nearest_miss(&t, 70.0), Some(2));
+        // rest beyond the limit counts before engagement, gouges before both
+        let t = [
+            trial(0.5, Some((0, 0.0060, 60.0))),
+            trial(0.35, Some((0, 0.0040, 99.0))),
+            trial(0.22, Some((1, 0.0, 60.0))),
+        ];
+        assert_eq!(nearest_miss(&t, 70.0), Some(1));
+        let t = [trial(0.5, Some((2, 0.0, 60.0))), trial(0.35, Some((1, 0.02, 99.0)))];
+        assert_eq!(nearest_miss(&t, 70.0), Some(1));
+        assert_eq!(nearest_miss(&[trial(0.5, None)], 70.0), None);
+    }
 }

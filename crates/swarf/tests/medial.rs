@@ -9,7 +9,9 @@ use swarf::sim::SimOptions;
 use swarf::strategy::{Params, StrategyKind};
 use swarf::toolpath::Motion;
 
-// (the negated comparisons make NaN fail)
+mod common;
+
+// (the negated comparison makes NaN fail)
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 #[test]
 fn medial_programs_are_clean_and_tangent_continuous() {
@@ -41,15 +43,7 @@ fn medial_programs_are_clean_and_tangent_continuous() {
             let out = rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
             let r = &out.report;
             let what = format!("{name} ({})", if climb { "climb" } else { "conventional" });
-            if r.gouges != 0 || r.rapid_collisions != 0 || r.plunges != 0 {
-                bad.push(format!(
-                    "{what}: {} gouges, {} rapid collisions, {} plunges",
-                    r.gouges, r.rapid_collisions, r.plunges
-                ));
-            }
-            if !(r.rest_fraction < 0.005) {
-                bad.push(format!("{what}: rest {:.4} of the reachable area", r.rest_fraction));
-            }
+            common::check_clean(&what, r, &mut bad);
             let turns = out.toolpath.cutting_turns();
             assert!(turns.len() > 20, "{what}: {} junctions", turns.len());
             let worst = turns.iter().map(|t| t.1).fold(0.0, f64::max);

@@ -444,6 +444,8 @@ pub struct Trial {
 /// A simulated candidate.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TrialSim {
+    /// Gouges (cuts into the part).
+    pub gouges: usize,
     /// Rest material, share of the reachable area.
     pub rest: f64,
     /// p99 engagement outside the entry, degrees.
