@@ -3,10 +3,9 @@
 //! one entry and no retract before the end, tangent-continuous wherever it cuts (no turn above
 //! 1° in the planned path, 2° once written to 1 µm, and none above 30° between chords at the
 //! scale of 0.05 or 0.1 mm, where runs of tiny arcs would read as a polygon), all arcs, and
-//! within the engagement bound
-//! (p99 ≤ reference + 10°). A pocket with islands gets a spiral over its island-free core and
-//! adaptive passes for the rest, clean and within the bound. The optimiser's choice is feasible
-//! and no faster candidate is.
+//! within the engagement bound (p99 ≤ reference + 10°). A pocket with islands gets a spiral
+//! over its island-free core and adaptive passes for the rest, clean and within the bound. The
+//! optimiser's choice is feasible and no faster candidate is.
 
 use std::path::Path;
 use swarf::pipeline::{RoughOptions, rough};
