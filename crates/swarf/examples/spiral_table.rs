@@ -1,7 +1,7 @@
 //! The table of the docs comparing spirals on the same pocket: the default (ζ per level, the
 //! floor chosen by simulation), `--optimise` (the start point chosen too; paper 4 §4) and the
-//! best constant ζ, each simulated by swarf and judged by the optimiser's criteria (rest ≤ 0.5 %, no gouge, p99 engagement outside the
-//! entry ≤ reference + 10°).
+//! best constant ζ, each simulated by swarf and judged by the optimiser's criteria (rest ≤
+//! 0.5 %, no gouge, p99 engagement outside the entry ≤ reference + 10°).
 //!
 //! `cargo run --release -p swarf --example spiral_table -- examples/cases/round_pocket.json ...`
 

@@ -263,7 +263,7 @@ pub fn plan(job: &Job, opts: &RoughOptions) -> Result<Option<Planned>> {
                         sim.gouges,
                         100.0 * sim.rest,
                         sim.p99_deg,
-                        job.width.engagement_deg() + 10.0
+                        spiral_bound(job)
                     ));
                 }
                 (best, planned)
@@ -337,7 +337,7 @@ fn optimise_spiral_planned(
 ) -> Result<(plan::spiral::SpiralChoice, Vec<plan::spiral::Trial>, Option<Toolpath>)> {
     use plan::spiral::Trial;
     use rayon::prelude::*;
-    let bound = job.width.engagement_deg() + 10.0;
+    let bound = spiral_bound(job);
     let p = &opts.params;
     let candidates = plan::spiral::candidates(regions, geom, p.spiral_start, p.spiral_optimise)?;
     let mut planned: Vec<Option<(Toolpath, Toolpath)>> =
@@ -409,6 +409,12 @@ pub const MAX_SIMULATED: usize = 8;
 /// The most rest [`optimise_spiral`] accepts, as a share of the reachable area.
 pub const REST_LIMIT: f64 = 0.005;
 
+/// The most p99 engagement outside the entry [`optimise_spiral`] accepts: the job's reference
+/// + 10°.
+fn spiral_bound(job: &Job) -> f64 {
+    job.width.engagement_deg() + 10.0
+}
+
 /// The program of one spiral candidate as planned and as it will be written (quantised), or
 /// `None` where the spiral cannot be made.
 fn plan_spiral_trial(
@@ -435,7 +441,7 @@ fn judge_spiral(
     let (rp, rest) = crate::sim::simulate(job, regions, &opts.sim, tp, &mut |_| {})?;
     let mut rep = Report::default();
     report::fill(&mut rep, tp, &rp, &rest, job.rapid_rate);
-    let bound = job.width.engagement_deg() + 10.0;
+    let bound = spiral_bound(job);
     Ok(plan::spiral::TrialSim {
         gouges: rep.gouges,
         rest: rep.rest_fraction,

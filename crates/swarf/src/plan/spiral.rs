@@ -63,9 +63,10 @@ pub const TRACK_LEVEL: f64 = 0.005;
 
 /// The radius, mm, to which the tool-centre region's convex corners are rounded before its
 /// implicit function is made. At a sharp corner the last turn (the level `TRACK_LEVEL`) bends
-/// at a radius of about two of that level's micrometres, and once its arcs are written to 1 µm their
-/// tangents at the ends tilted by several degrees (5.4° on square_pocket). Rounded to 0.1 mm
-/// they bend gently; the tool leaves a sliver of about (1 − π/4)·0.1² mm² in each corner.
+/// at a radius of about two of that level's micrometres, and once its arcs are written to 1 µm
+/// their tangents at the ends tilted by several degrees (5.4° on square_pocket). Rounded, they
+/// bend gently; at a right-angled corner the tool (radius r) then leaves a sliver of about
+/// (1 − π/4)·((r + R)² − r²) mm² more than it must, R this radius.
 pub const CORNER_RADIUS: f64 = 0.25;
 
 /// Points of the integrated spiral closer than this, mm, to the one kept before are dropped
@@ -180,20 +181,11 @@ pub fn core_level(field: &dyn Field, start: DVec2, f_floor: f64) -> Option<f64> 
         }
         let mut outside = vec![false; nx * ny];
         let mut stack = Vec::new();
-        for i in 0..nx {
-            for j in [0, ny - 1] {
-                if !inside[j * nx + i] && !outside[j * nx + i] {
-                    outside[j * nx + i] = true;
-                    stack.push((i, j));
-                }
-            }
-        }
-        for j in 0..ny {
-            for i in [0, nx - 1] {
-                if !inside[j * nx + i] && !outside[j * nx + i] {
-                    outside[j * nx + i] = true;
-                    stack.push((i, j));
-                }
+        let border = (0..nx).flat_map(|i| [(i, 0), (i, ny - 1)]).chain((0..ny).flat_map(|j| [(0, j), (nx - 1, j)]));
+        for (i, j) in border {
+            if !inside[j * nx + i] && !outside[j * nx + i] {
+                outside[j * nx + i] = true;
+                stack.push((i, j));
             }
         }
         while let Some((i, j)) = stack.pop() {
