@@ -6,10 +6,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use swarf::io::Input;
 use swarf::io::Overrides;
-use swarf::io::case::Input;
+use swarf::job::rough::{RoughOptions, RoughResult, Stage};
 use swarf::model::Width;
-use swarf::pipeline::{RoughOptions, RoughResult, Stage};
 use swarf::post::Post;
 use swarf::strategy::{OffsetOrder, Params, StrategyKind};
 
@@ -505,7 +505,7 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
 }
 
 fn run(job: &swarf::model::Job, opts: &RoughOptions, quiet: bool) -> Result<RoughResult, Failure> {
-    with_bar(quiet, |p| swarf::pipeline::rough(job, opts, p))
+    with_bar(quiet, |p| swarf::job::rough::rough(job, opts, p))
 }
 
 /// Runs `f` with a progress bar on a terminal.
@@ -696,7 +696,7 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
     };
     let res = match &input {
         Input::Flat(job) => run(job, &opts, a.opts.quiet)?,
-        Input::Mesh(job) => with_bar(a.opts.quiet, |p| swarf::zlevel::rough(job, &opts, p))?,
+        Input::Mesh(job) => with_bar(a.opts.quiet, |p| swarf::job::zlevel::rough(job, &opts, p))?,
     };
     let scene = || match &input {
         Input::Flat(job) => Scene::of(job),
@@ -716,7 +716,7 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
 }
 
 fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
-    let mut job = swarf::pipeline::example_job();
+    let mut job = swarf::io::example_job();
     swarf::io::apply(&mut job, &overrides(o)?);
     job.validate()?;
     std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create the folder", dir.display()))?;
@@ -749,21 +749,21 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
             swarf::Error::input(&a.input, "file", "plan needs a 3D job: a case with part_stl, or an STL part").into()
         );
     };
-    let db = swarf::tooldb::ToolDb::read(&a.tools)?;
+    let db = swarf::model::tooldb::ToolDb::read(&a.tools)?;
     if !(a.clearance.is_finite() && a.clearance >= 0.0) {
         return Err(swarf::Error::param("--clearance", "must be zero or positive").into());
     }
-    let opts = swarf::toolseq::SeqOptions {
+    let opts = swarf::job::toolseq::SeqOptions {
         decomposition: match a.decomposition {
-            DecompositionArg::Trim => swarf::toolseq::Decomposition::Trim,
-            DecompositionArg::Regions => swarf::toolseq::Decomposition::Regions,
+            DecompositionArg::Trim => swarf::job::toolseq::Decomposition::Trim,
+            DecompositionArg::Regions => swarf::job::toolseq::Decomposition::Regions,
         },
         prune: !a.exhaustive,
         ramp_deg: a.ramp_angle,
         clearance: a.clearance,
     };
     let t0 = std::time::Instant::now();
-    let sp = swarf::toolseq::plan(&job, &db, &opts)?;
+    let sp = swarf::job::toolseq::plan(&job, &db, &opts)?;
     let compute_s = t0.elapsed().as_secs_f64();
     let post = match a.post {
         PostArg::Linuxcnc => Post::LinuxCnc,
@@ -888,7 +888,8 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
 
 /// The cheapest sequences as paper 3's Table 2: diameters, time and cost.
 fn shape(a: ShapeArgs) -> Result<(), Failure> {
-    use swarf::implicit::{Field, draw, oscillator, shape};
+    use swarf::implicit::{Field, oscillator, shape};
+    use swarf::plot::shape as draw;
     let s = shape::Shape::load(&a.input)?;
     let Some((lo, hi)) = s.bounds() else {
         return Err(swarf::Error::input(&a.input, "shape", "the shape is unbounded: intersect it with a box").into());
@@ -933,7 +934,7 @@ fn shape(a: ShapeArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-fn plan_table(sp: &swarf::toolseq::SeqPlan, rows: usize) -> String {
+fn plan_table(sp: &swarf::job::toolseq::SeqPlan, rows: usize) -> String {
     let mut out = format!(
         "{:<36} {:>10} {:>12} {:>11} {:>11}\n",
         "tool sequence (diameters)", "time min", "machining $", "tooling $", "total $"

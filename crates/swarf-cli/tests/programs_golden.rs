@@ -94,7 +94,11 @@ fn runs(slow: bool) -> Vec<Rough> {
     ] {
         v.push(rough(format!("pocket_islands.{name}"), pi.clone(), args));
     }
-    v.push(rough("round_pocket.spiral-conventional", case("round_pocket"), &["--strategy", "spiral", "--conventional"]));
+    v.push(rough(
+        "round_pocket.spiral-conventional",
+        case("round_pocket"),
+        &["--strategy", "spiral", "--conventional"],
+    ));
     v.push(rough("l_pocket.adaptive-stepover", case("l_pocket"), &["--stepover", "0.3", "--stepdown", "2"]));
     let demo = repo_root().join("crates/swarf/examples_data/demo_pocket.json");
     v.push(rough("demo_pocket.adaptive", demo, &[]));
@@ -215,7 +219,11 @@ fn check(slow: bool) {
     let mut got = got.into_inner().expect("lock");
     if !slow {
         got.extend(run_plan(dir.path(), &[], "trim"));
-        got.extend(run_plan(dir.path(), &["--decomposition", "regions", "--post", "grbl", "--clearance", "3"], "regions"));
+        got.extend(run_plan(
+            dir.path(),
+            &["--decomposition", "regions", "--post", "grbl", "--clearance", "3"],
+            "regions",
+        ));
     }
     let mut record = read_record();
     if std::env::var_os("SWARF_BLESS").is_some() {

@@ -19,8 +19,8 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use std::time::Duration;
+use swarf::job::rough::{RoughOptions, plan};
 use swarf::model::{Job, Regions};
-use swarf::pipeline::{RoughOptions, plan};
 use swarf::report::Stats;
 use swarf::sim::{RasterSim, Replay, SampleKind, SdfSim, SimEngine, SimOptions, simulate};
 use swarf::toolpath::Toolpath;

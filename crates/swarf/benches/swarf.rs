@@ -20,8 +20,8 @@ use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_mai
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 use swarf::geom::DVec2;
+use swarf::job::rough::{RoughOptions, rough};
 use swarf::model::Job;
-use swarf::pipeline::{RoughOptions, rough};
 use swarf::sim::sweep::Path;
 use swarf::sim::{RasterSim, SampleKind, SimOptions};
 use swarf::strategy::{Params, StrategyKind};
@@ -205,15 +205,16 @@ fn full(c: &mut Criterion) {
 fn toolseq(c: &mut Criterion) {
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples");
     let case = std::path::PathBuf::from(format!("{root}/3d/bowl_cavity.json"));
-    let swarf::io::case::Input::Mesh(job) = swarf::io::load_input(&case, &Default::default()).expect("case") else {
+    let swarf::io::Input::Mesh(job) = swarf::io::load_input(&case, &Default::default()).expect("case") else {
         panic!("a 3D case")
     };
-    let db = swarf::tooldb::ToolDb::read(std::path::Path::new(&format!("{root}/tools/table1.json"))).expect("tools");
-    let opts = swarf::toolseq::SeqOptions { prune: false, ..Default::default() };
+    let db =
+        swarf::model::tooldb::ToolDb::read(std::path::Path::new(&format!("{root}/tools/table1.json"))).expect("tools");
+    let opts = swarf::job::toolseq::SeqOptions { prune: false, ..Default::default() };
     let mut g = c.benchmark_group("toolseq");
     g.sample_size(10).measurement_time(Duration::from_secs(30));
     g.bench_function("table1-exhaustive", |b| {
-        b.iter(|| black_box(swarf::toolseq::plan(&job, &db, &opts).expect("plan").sequences.len()))
+        b.iter(|| black_box(swarf::job::toolseq::plan(&job, &db, &opts).expect("plan").sequences.len()))
     });
     g.finish();
 }

@@ -15,8 +15,8 @@ use std::fmt::Write;
 use std::path::Path;
 use swarf::geom::medial::medial_axis;
 use swarf::geom::{Area, DVec2};
-use swarf::pipeline::{RoughOptions, rough};
-use swarf::plan::medial::{MIN_OBJECT_ANGLE, region, runs};
+use swarf::job::rough::{RoughOptions, rough};
+use swarf::strategy::medial::{MIN_OBJECT_ANGLE, region, runs};
 use swarf::strategy::{LayerGeom, Params, StrategyKind, wall_margin};
 use swarf::toolpath::{Motion, MoveKind, Toolpath};
 

@@ -5,9 +5,10 @@
 //!
 //! `cargo run --release -p swarf --example spiral_table -- examples/cases/round_pocket.json ...`
 
-use swarf::pipeline::{RoughOptions, spiral_study};
-use swarf::plan::spiral::Trial;
+use swarf::job::rough::RoughOptions;
 use swarf::strategy::StrategyKind;
+use swarf::strategy::spiral::Trial;
+use swarf::strategy::spiral_search::spiral_study;
 
 fn row(name: &str, what: &str, t: &Trial) {
     let sim = t.sim.map_or("not simulated".to_string(), |s| {
@@ -37,7 +38,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut opts = RoughOptions::default();
         opts.params.strategy = StrategyKind::Spiral;
         let name = std::path::Path::new(&path).file_stem().map_or(path.clone(), |s| s.to_string_lossy().into_owned());
-        let st = spiral_study(&job, &opts)?;
+        let st = spiral_study(&job, &opts.params, &opts.sim)?;
         for (what, (choice, trials)) in [("default", &st.default), ("--optimise", &st.optimised)] {
             if let Some(t) = trials.iter().find(|t| t.choice == *choice) {
                 row(&name, what, t);

@@ -1,6 +1,6 @@
 //! The report: the figures that tell a machinist whether to trust a program.
 
-use crate::sim::raster::{Replay, Rest, SampleKind};
+use crate::sim::{Replay, Rest, SampleKind};
 use crate::toolpath::{Motion, Toolpath};
 
 /// Engagement statistics over samples with engagement above zero (the verifier's convention),
@@ -123,11 +123,11 @@ pub struct Report {
     /// Deepest gouge, mm.
     pub gouge_max_mm: f64,
     /// Where the first gouges are (move index in the toolpath, place, depth); at most 20.
-    pub gouge_at: Vec<crate::sim::raster::Event>,
+    pub gouge_at: Vec<crate::sim::Event>,
     /// Where the first plunges are; at most 20.
-    pub plunge_at: Vec<crate::sim::raster::Event>,
+    pub plunge_at: Vec<crate::sim::Event>,
     /// Where the first rapid collisions are; at most 20.
-    pub rapid_collision_at: Vec<crate::sim::raster::Event>,
+    pub rapid_collision_at: Vec<crate::sim::Event>,
     /// Rapids through uncut material.
     pub rapid_collisions: usize,
     /// Reachable material left, mm².

@@ -1,10 +1,10 @@
-//! The same job gives the same program: `swarf::pipeline::rough` twice on the same input must
+//! The same job gives the same program: `swarf::job::rough::rough` twice on the same input must
 //! write byte-identical G-code and the same report (timings aside), whatever the number of
 //! threads it runs on.
 
 use std::path::Path;
+use swarf::job::rough::{RoughOptions, RoughResult, rough};
 use swarf::model::Job;
-use swarf::pipeline::{RoughOptions, RoughResult, rough};
 use swarf::report::Report;
 use swarf::strategy::StrategyKind;
 
@@ -54,7 +54,7 @@ fn check(job: &Job, opts: &RoughOptions, what: &str) {
 
 #[test]
 fn builtin_example_is_deterministic() {
-    let job = swarf::pipeline::example_job();
+    let job = swarf::io::example_job();
     let opts = RoughOptions { input_name: "demo".into(), ..Default::default() };
     check(&job, &opts, "example_job, offset");
 }

@@ -6,8 +6,8 @@
 //! rectangular stock, no part, then looks at the samples of one move in its steady middle.
 
 use swarf::geom::{Area, DVec2, DVec3};
+use swarf::job::rough::{RoughOptions, rough};
 use swarf::model::{Job, Tool, Width};
-use swarf::pipeline::{RoughOptions, rough};
 use swarf::sim::{RasterSim, Replay, Sample, SampleKind, SimOptions};
 use swarf::toolpath::{MoveKind, Toolpath};
 

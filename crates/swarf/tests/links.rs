@@ -4,7 +4,7 @@
 //! material through cleared space instead of lifts).
 
 use std::path::Path;
-use swarf::pipeline::{RoughOptions, rough};
+use swarf::job::rough::{RoughOptions, rough};
 use swarf::toolpath::MoveKind;
 
 #[test]

@@ -4,7 +4,7 @@
 //! the written program), and made mostly of arcs.
 
 use std::path::Path;
-use swarf::pipeline::{RoughOptions, rough};
+use swarf::job::rough::{RoughOptions, rough};
 use swarf::sim::SimOptions;
 use swarf::strategy::{Params, StrategyKind};
 use swarf::toolpath::Motion;
@@ -84,7 +84,7 @@ fn medial_programs_are_clean_and_tangent_continuous() {
 fn a_corner_reads_as_a_turn() {
     use swarf::geom::{DVec2, DVec3};
     use swarf::toolpath::{MoveKind, Toolpath};
-    let job = swarf::pipeline::example_job();
+    let job = swarf::io::example_job();
     let mut tp = Toolpath::new(job.tool.clone(), DVec3::new(0.0, 0.0, 1.0), 5.0);
     tp.line(MoveKind::Descend, DVec3::new(0.0, 0.0, -1.0), 100.0);
     tp.line(MoveKind::Cut, DVec3::new(10.0, 0.0, -1.0), 100.0);

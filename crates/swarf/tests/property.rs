@@ -11,8 +11,8 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 use swarf::geom::{DVec2, dist_point_segment, ring_area};
+use swarf::job::rough::{RoughOptions, rough};
 use swarf::model::Job;
-use swarf::pipeline::{RoughOptions, rough};
 use swarf::sim::SimOptions;
 use swarf::strategy::{LayerGeom, OffsetOrder, Params, StrategyKind};
 
@@ -463,7 +463,7 @@ fn run(case: &Case) -> (Vec<String>, String) {
         // the planned path, before its coordinates are rounded to the post's micrometre (a
         // bridge a few tenths of a millimetre long between two small circles then turns by
         // up to a few degrees in print; the example cases check the written program)
-        let planned = swarf::pipeline::plan(&case.job, &opts).ok().flatten().map(|p| p.toolpath);
+        let planned = swarf::job::rough::plan(&case.job, &opts).ok().flatten().map(|p| p.toolpath);
         let turns = planned.as_ref().map_or_else(Vec::new, |t| t.cutting_turns());
         let worst = turns.iter().copied().fold((0, 0.0f64), |a, b| if b.1 > a.1 { b } else { a });
         if worst.1 > 1.0 {

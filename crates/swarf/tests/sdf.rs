@@ -4,7 +4,7 @@
 //! find the same gouges, rapid collisions and plunges (none), and about the same rest.
 
 use std::path::Path;
-use swarf::pipeline::{RoughOptions, plan};
+use swarf::job::rough::{RoughOptions, plan};
 use swarf::report::Stats;
 use swarf::sim::{Replay, SampleKind, SimEngine, SimOptions, simulate};
 

@@ -8,7 +8,7 @@
 //! optimiser's choice is feasible and no faster candidate is.
 
 use std::path::Path;
-use swarf::pipeline::{RoughOptions, rough};
+use swarf::job::rough::{RoughOptions, rough};
 use swarf::sim::SimOptions;
 use swarf::strategy::{Params, StrategyKind};
 use swarf::toolpath::{Motion, MoveKind};
@@ -49,7 +49,7 @@ fn spirals_are_clean_smooth_and_in_one_piece() {
             // tangent-continuous as planned; the written program rounds coordinates to 1 µm,
             // which tilts the ends of the shortest arcs (a few hundredths of a millimetre long,
             // in the tight tips of the levels along an L's legs) by up to 2°
-            let planned = swarf::pipeline::plan(&job, &opts).unwrap_or_else(|e| panic!("{e}")).expect("a program");
+            let planned = swarf::job::rough::plan(&job, &opts).unwrap_or_else(|e| panic!("{e}")).expect("a program");
             let turns = planned.toolpath.cutting_turns();
             assert!(turns.len() > 20, "{what}: {} junctions", turns.len());
             let worst = turns.iter().map(|t| t.1).fold(0.0, f64::max);
@@ -114,7 +114,8 @@ fn the_optimiser_keeps_the_fastest_feasible_spiral() {
         sim: SimOptions { res: Some(0.1), ..Default::default() },
         ..Default::default()
     };
-    let study = swarf::pipeline::optimise_spiral_job(&job, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let study = swarf::strategy::spiral_search::optimise_spiral_job(&job, &opts.params, &opts.sim)
+        .unwrap_or_else(|e| panic!("{e}"));
     let (choice, trials) = &study;
     let chosen = trials.iter().find(|t| t.choice == *choice).expect("the choice is a trial");
     assert!(chosen.feasible(), "{chosen:?}");
@@ -123,7 +124,7 @@ fn the_optimiser_keeps_the_fastest_feasible_spiral() {
         let Some(time) = t.time_min else { continue };
         if time < t_best {
             // a faster candidate was simulated and failed, or shares a damping that failed
-            let failed = |u: &swarf::plan::spiral::Trial| u.sim.is_some_and(|s| !s.feasible);
+            let failed = |u: &swarf::strategy::spiral::Trial| u.sim.is_some_and(|s| !s.feasible);
             let pruned =
                 trials.iter().any(|u| u.choice.floor == t.choice.floor && u.choice.zeta == t.choice.zeta && failed(u));
             assert!(failed(t) || pruned, "a faster candidate was passed over: {t:?}");

@@ -8,13 +8,13 @@
 //! chosen programs neither plunge nor gouge the part (the tool disk against the mesh's heights,
 //! independently of the planner).
 
+use swarf::geom::mesh::Mesh;
 use swarf::geom::{DVec2, DVec3};
-use swarf::io::stl::Mesh;
+use swarf::job::toolseq::{Decomposition, SeqOptions};
+use swarf::model::MeshJob;
+use swarf::model::tooldb::{Machine, ToolDb, ToolSpec};
 use swarf::model::{Tool, Width};
-use swarf::tooldb::{Machine, ToolDb, ToolSpec};
 use swarf::toolpath::MoveKind;
-use swarf::toolseq::{Decomposition, SeqOptions};
-use swarf::zlevel::MeshJob;
 
 fn height(x: f64, y: f64) -> f64 {
     if (x - 15.0).abs() < 6.5 && y.abs() < 6.5 {
@@ -91,7 +91,7 @@ fn search_finds_the_brute_force_optimum() {
     let job = cavity();
     let db = db();
     let opts = SeqOptions::default();
-    let plan = swarf::toolseq::plan(&job, &db, &opts).unwrap_or_else(|e| panic!("{e}"));
+    let plan = swarf::job::toolseq::plan(&job, &db, &opts).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(plan.candidates, 8);
     // brute force: every subset of the three bigger tools, then the smallest (T4, index 2),
     // each costed on its own
@@ -101,7 +101,7 @@ fn search_finds_the_brute_force_optimum() {
         let mut seq: Vec<usize> =
             bigger.iter().enumerate().filter(|(b, _)| mask >> b & 1 == 1).map(|(_, &i)| i).collect();
         seq.push(2);
-        let c = swarf::toolseq::cost_of(&job, &db, &seq, &opts).unwrap_or_else(|e| panic!("{e}"));
+        let c = swarf::job::toolseq::cost_of(&job, &db, &seq, &opts).unwrap_or_else(|e| panic!("{e}"));
         brute.push((c.total_cost, seq));
     }
     brute.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -126,12 +126,12 @@ fn search_finds_the_brute_force_optimum() {
     // the sequences differ: the bigger tools pay for themselves or not
     assert!(brute[7].0 > brute[0].0 * 1.05, "{brute:?}");
     // without the bound every candidate is costed, and the best is the same
-    let all = swarf::toolseq::plan(&job, &db, &SeqOptions { prune: false, ..opts.clone() }).unwrap();
+    let all = swarf::job::toolseq::plan(&job, &db, &SeqOptions { prune: false, ..opts.clone() }).unwrap();
     assert_eq!(all.sequences.len(), 8);
     assert_eq!(all.best().tools, best.tools);
     // Algorithm 3 plans too, and costs every candidate
     let regions =
-        swarf::toolseq::plan(&job, &db, &SeqOptions { decomposition: Decomposition::Regions, ..opts }).unwrap();
+        swarf::job::toolseq::plan(&job, &db, &SeqOptions { decomposition: Decomposition::Regions, ..opts }).unwrap();
     assert_eq!(regions.sequences.len(), 8);
 }
 
@@ -142,13 +142,13 @@ fn programs_neither_plunge_nor_gouge() {
     // a sequence of three tools, so that two of them cut rest material
     let mut small = db.clone();
     small.tools.retain(|t| t.id != "T3");
-    let plan = swarf::toolseq::plan(&job, &small, &SeqOptions { prune: false, ..Default::default() }).unwrap();
+    let plan = swarf::job::toolseq::plan(&job, &small, &SeqOptions { prune: false, ..Default::default() }).unwrap();
     let seq = plan.sequences.iter().find(|s| s.tools == ["T1", "T2", "T4"]).expect("costed");
     assert!(seq.cost.total_cost > 0.0);
     let res = 0.25;
     let lo = job.stock_lo.truncate();
     let g = swarf::sim::grid::Grid::covering(lo, job.stock_hi.truncate(), 12.0, res, lo);
-    let part = swarf::mesh::height_map(&job.mesh, &g);
+    let part = swarf::sim::heights::height_map(&job.mesh, &g);
     // the best sequence's programs
     assert_eq!(plan.programs.len(), plan.best().tools.len());
     let mut cut_total = 0.0;
@@ -203,7 +203,7 @@ fn programs_neither_plunge_nor_gouge() {
 /// The thickest stock left above the lowest height a flat tool of radius `r` reaches (the
 /// grey closing of the part's heights by its disk, grown by a cell to be fair to the raster),
 /// over every third cell of the rest map.
-fn rest_in_reach(rest: &swarf::toolseq::RestMaps, r: f64) -> f64 {
+fn rest_in_reach(rest: &swarf::job::toolseq::RestMaps, r: f64) -> f64 {
     let g = rest.grid;
     let rc = (r / g.res).ceil() as i64 + 1;
     let disk: Vec<(i64, i64)> = (-rc..=rc)

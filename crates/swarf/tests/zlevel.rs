@@ -4,8 +4,8 @@
 //! corners, (R² − πR²/4) × 8 mm each.
 
 use std::path::{Path, PathBuf};
-use swarf::io::case::Input;
-use swarf::pipeline::RoughOptions;
+use swarf::io::Input;
+use swarf::job::rough::RoughOptions;
 use swarf::strategy::{Params, StrategyKind};
 
 /// Facets of the block (counter-clockwise seen from outside).
@@ -62,7 +62,7 @@ fn tmpdir(name: &str) -> PathBuf {
     d
 }
 
-fn rough(strategy: StrategyKind) -> swarf::pipeline::RoughResult {
+fn rough(strategy: StrategyKind) -> swarf::job::rough::RoughResult {
     let dir = tmpdir(strategy.name());
     let case = write_case(&dir);
     let Input::Mesh(job) = swarf::io::load_input(&case, &Default::default()).unwrap_or_else(|e| panic!("{e}")) else {
@@ -73,7 +73,7 @@ fn rough(strategy: StrategyKind) -> swarf::pipeline::RoughResult {
         sim: swarf::sim::SimOptions { res: Some(0.1), ..Default::default() },
         ..Default::default()
     };
-    let res = swarf::zlevel::rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{e}"));
+    let res = swarf::job::zlevel::rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{e}"));
     let _ = std::fs::remove_dir_all(&dir);
     res
 }

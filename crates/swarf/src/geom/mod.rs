@@ -13,6 +13,7 @@ pub mod area;
 pub mod biarc;
 pub mod index;
 pub mod medial;
+pub mod mesh;
 pub mod simplify;
 
 pub use area::Area;

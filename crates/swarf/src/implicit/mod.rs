@@ -15,7 +15,7 @@
 //!   constant or chosen per level so that successive turns stay within a stepover, ending with
 //!   one turn along the boundary level.
 
-pub mod draw;
+pub mod levels;
 pub mod oscillator;
 pub mod region;
 pub mod rfunc;

@@ -44,7 +44,7 @@
 //! [`engagement_spacing`] at the level's curvature there, so `ζ(c) = s · min(w_here |∇f|) / F(c)`. The estimate is linear and the
 //! table conservative, so [`spiral`] measures the result ([`max_turn_spacing`]) and rescales ζ
 //! (at most five runs), keeping the widest spiral whose measured spacing is within `w`. `F` and `g_min` are tabulated once
-//! per spiral from the level sets of a grid (marching squares, [`super::draw::Grid`]); between
+//! per spiral from the level sets of a grid (marching squares, [`super::levels::Grid`]); between
 //! table levels the smaller ζ of the two neighbours is used. ζ is held constant through each
 //! integration step and updated between steps, which the error control never sees.
 //!
@@ -65,7 +65,7 @@
 // `!(x > y)` is meant: a NaN must fail every check
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::draw::Grid;
+use super::levels::Grid;
 use super::shape::Field;
 use crate::error::{Error, Result};
 use crate::geom::DVec2;

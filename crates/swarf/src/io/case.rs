@@ -5,12 +5,12 @@
 //! then walked by hand, so that every semantic error names the key path, e.g.
 //! `part[1].holes[0][3]: expected a point [x, y] of two numbers`.
 
+use super::Input;
 use crate::error::{Error, Result};
 use crate::geom::area::Fill;
+use crate::geom::mesh::Placement;
 use crate::geom::{Area, DVec2};
-use crate::io::stl::{Mesh, Placement};
-use crate::model::{Job, Tool, Width};
-use crate::zlevel::MeshJob;
+use crate::model::{Job, MeshJob, Tool, Width};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -122,15 +122,6 @@ pub fn parse_case(path: &Path, bytes: &[u8]) -> Result<Job> {
             Err(Error::input(path, "stock_box", "a 3D case (stock_box / part_stl): this reader takes 2.5D cases only"))
         }
     }
-}
-
-/// What a case describes: a 2.5D job (polygons) or a 3D one (a mesh in a stock box).
-#[derive(Debug, Clone)]
-pub enum Input {
-    /// Stock and part outlines.
-    Flat(Job),
-    /// A mesh part in a stock box.
-    Mesh(Box<MeshJob>),
 }
 
 /// Reads a case file of either kind.
@@ -289,7 +280,7 @@ fn mesh_case(cx: &Ctx, root: &Value, path: &Path) -> Result<MeshJob> {
         .ok_or_else(|| cx.err("part_stl", "missing: the part's STL file, relative to this case"))?;
     let stl = stl.as_str().ok_or_else(|| cx.err("part_stl", format!("expected a file name, found {}", short(stl))))?;
     let stl_path = path.parent().unwrap_or(Path::new("")).join(stl);
-    let mut mesh = Mesh::read(&stl_path)?;
+    let mut mesh = super::stl::read(&stl_path)?;
     let mut place = Placement::default();
     if let Some(t) = root.get("part_transform").filter(|t| !t.is_null()) {
         if !t.is_object() {

@@ -6,7 +6,7 @@ pub mod drawing;
 pub mod stl;
 
 use crate::error::{Error, Result};
-use crate::model::Job;
+use crate::model::{Job, MeshJob};
 use std::path::Path;
 
 /// What the user may set on top of (or instead of) what the input file says.
@@ -29,9 +29,27 @@ pub struct Overrides {
     /// Drawing import options.
     pub import: swarf_import::ImportOptions,
     /// Placement of an STL part read on its own (its units' scale comes from `import.units`).
-    pub placement: stl::Placement,
+    pub placement: crate::geom::mesh::Placement,
     /// Stock round an STL part read on its own: its bounds grown by this sideways and on top, mm.
     pub stock_margin: f64,
+}
+
+/// What a case describes: a 2.5D job (polygons) or a 3D one (a mesh in a stock box).
+#[derive(Debug, Clone)]
+pub enum Input {
+    /// Stock and part outlines.
+    Flat(Job),
+    /// A mesh part in a stock box.
+    Mesh(Box<MeshJob>),
+}
+
+/// The built-in example job (a pocket with two islands).
+pub fn example_job() -> Job {
+    let text = include_str!("../../examples_data/demo_pocket.json");
+    match case::parse_case(std::path::Path::new("demo_pocket.json"), text.as_bytes()) {
+        Ok(j) => j,
+        Err(e) => unreachable!("the built-in example is valid: {e}"),
+    }
 }
 
 /// Reads a 2.5D case (`.json`), DXF or SVG file into a job, applies the overrides and validates it.
@@ -62,18 +80,18 @@ pub fn load_job(path: &Path, ov: &Overrides) -> Result<Job> {
 /// on top, its bottom at the part's lowest point), is placed by `placement` (after the units'
 /// scale), and is roughed to its lowest point with a step-down of half the tool diameter unless
 /// the overrides say otherwise.
-pub fn load_input(path: &Path, ov: &Overrides) -> Result<case::Input> {
+pub fn load_input(path: &Path, ov: &Overrides) -> Result<Input> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let is_stl = ext == "stl" || (ext != "json" && ext != "dxf" && ext != "svg" && sniff_stl(path));
     if is_stl {
-        let mut mesh = stl::Mesh::read(path)?;
+        let mut mesh = stl::read(path)?;
         let mut place = ov.placement;
         place.scale *= ov.import.units.map_or(1.0, |u| u.mm());
         mesh.transform(&place);
         let (lo, hi) = mesh.bounds().ok_or_else(|| Error::input(path, "file", "the mesh is empty"))?;
         let m = ov.stock_margin;
         let d = ov.tool_diameter.unwrap_or(6.0);
-        let mut job = crate::zlevel::MeshJob {
+        let mut job = MeshJob {
             name: path.file_stem().and_then(|s| s.to_str()).unwrap_or("part").to_string(),
             mesh,
             stock_lo: crate::geom::DVec3::new(lo.x - m, lo.y - m, lo.z),
@@ -90,23 +108,23 @@ pub fn load_input(path: &Path, ov: &Overrides) -> Result<case::Input> {
         };
         apply_mesh(&mut job, ov);
         job.validate()?;
-        return Ok(case::Input::Mesh(Box::new(job)));
+        return Ok(Input::Mesh(Box::new(job)));
     }
     if ext == "json" || (ext != "dxf" && ext != "svg" && sniff_json(path)) {
         return match case::read_input(path)? {
-            case::Input::Flat(mut job) => {
+            Input::Flat(mut job) => {
                 apply(&mut job, ov);
                 job.validate()?;
-                Ok(case::Input::Flat(job))
+                Ok(Input::Flat(job))
             }
-            case::Input::Mesh(mut job) => {
+            Input::Mesh(mut job) => {
                 apply_mesh(&mut job, ov);
                 job.validate()?;
-                Ok(case::Input::Mesh(job))
+                Ok(Input::Mesh(job))
             }
         };
     }
-    load_job(path, ov).map(case::Input::Flat)
+    load_job(path, ov).map(Input::Flat)
 }
 
 fn head(path: &Path) -> Vec<u8> {
@@ -174,7 +192,7 @@ fn apply_cutting(
 }
 
 /// Applies overrides to a mesh job.
-pub fn apply_mesh(job: &mut crate::zlevel::MeshJob, ov: &Overrides) {
+pub fn apply_mesh(job: &mut MeshJob, ov: &Overrides) {
     apply_cutting(ov, &mut job.tool, &mut job.width, &mut job.feed, &mut job.spindle_rpm);
     if let Some(s) = ov.stepdown {
         job.stepdown = s;

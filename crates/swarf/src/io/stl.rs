@@ -16,144 +16,57 @@
 
 use crate::error::{Error, Result};
 use crate::geom::DVec3;
+use crate::geom::mesh::Mesh;
 use std::path::Path;
-
-/// A triangle soup with what reading it found.
-#[derive(Debug, Clone, Default)]
-pub struct Mesh {
-    /// Triangles, vertices counter-clockwise seen from outside.
-    pub tris: Vec<[DVec3; 3]>,
-    /// Facets dropped as degenerate (zero area or repeated vertices).
-    pub dropped: usize,
-    /// True when the file was binary.
-    pub binary: bool,
-}
 
 /// Relative area below which a facet counts as degenerate (of the square of its longest edge).
 const DEGENERATE: f64 = 1e-12;
 
-impl Mesh {
-    /// Reads an STL file.
-    pub fn read(path: &Path) -> Result<Mesh> {
-        let bytes = std::fs::read(path).map_err(|e| Error::input(path, "file", format!("cannot read: {e}")))?;
-        Self::parse(path, &bytes)
-    }
-
-    /// Parses the bytes of an STL file (`path` names it in errors).
-    pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
-        let mesh = if is_binary(bytes) {
-            parse_binary(path, bytes)?
-        } else if starts_with_solid(bytes) {
-            parse_ascii(path, bytes)?
-        } else if bytes.len() < 84 {
-            return Err(Error::input(
-                path,
-                "file",
-                format!(
-                    "{} bytes: too short for a binary STL (84 bytes of header) and not ASCII STL (no \"solid\")",
-                    bytes.len()
-                ),
-            ));
-        } else {
-            let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
-            return Err(Error::input(
-                path,
-                "file",
-                format!(
-                    "not an STL file: not ASCII (does not start with \"solid\") and not binary (the header counts {n} facets, which take {} bytes, but the file has {})",
-                    84 + 50 * n,
-                    bytes.len()
-                ),
-            ));
-        };
-        if mesh.tris.is_empty() {
-            return Err(Error::input(
-                path,
-                "file",
-                if mesh.dropped > 0 {
-                    format!("all {} facets are degenerate (zero area): no surface to machine", mesh.dropped)
-                } else {
-                    "the mesh has no facets".to_string()
-                },
-            ));
-        }
-        Ok(mesh)
-    }
-
-    /// Bounding box (min, max); `None` when empty.
-    pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
-        let mut it = self.tris.iter().flatten();
-        let first = *it.next()?;
-        Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
-    }
-
-    /// Applies a placement: scale, then rotations about X, Y and Z (degrees, right-handed, in
-    /// that order), then a translation. A mirroring scale (negative) keeps the facets facing
-    /// outwards by reversing their vertex order.
-    pub fn transform(&mut self, t: &Placement) {
-        let (sx, cx) = t.rotate_deg[0].to_radians().sin_cos();
-        let (sy, cy) = t.rotate_deg[1].to_radians().sin_cos();
-        let (sz, cz) = t.rotate_deg[2].to_radians().sin_cos();
-        let f = |p: DVec3| {
-            let p = p * t.scale;
-            let p = DVec3::new(p.x, cx * p.y - sx * p.z, sx * p.y + cx * p.z);
-            let p = DVec3::new(cy * p.x + sy * p.z, p.y, -sy * p.x + cy * p.z);
-            let p = DVec3::new(cz * p.x - sz * p.y, sz * p.x + cz * p.y, p.z);
-            p + t.translate
-        };
-        for tri in &mut self.tris {
-            for v in tri.iter_mut() {
-                *v = f(*v);
-            }
-            if t.scale < 0.0 {
-                tri.swap(1, 2);
-            }
-        }
-    }
-
-    /// Edges used by exactly one facet (after welding vertices that coincide within `tol`): zero
-    /// for a closed surface.
-    pub fn open_edges(&self, tol: f64) -> usize {
-        use std::collections::HashMap;
-        let key = |p: DVec3| ((p.x / tol).round() as i64, (p.y / tol).round() as i64, (p.z / tol).round() as i64);
-        let mut count: HashMap<_, i32> = HashMap::new();
-        for t in &self.tris {
-            for k in 0..3 {
-                let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
-                if a == b {
-                    continue;
-                }
-                let e = if a < b { (a, b) } else { (b, a) };
-                *count.entry(e).or_default() += 1;
-            }
-        }
-        count.values().filter(|&&c| c == 1).count()
-    }
+/// Reads an STL file.
+pub fn read(path: &Path) -> Result<Mesh> {
+    let bytes = std::fs::read(path).map_err(|e| Error::input(path, "file", format!("cannot read: {e}")))?;
+    parse(path, &bytes)
 }
 
-/// Where a mesh goes: `p' = Rz·Ry·Rx·(scale·p) + translate`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Placement {
-    /// Uniform scale (25.4 for a part drawn in inches, 1000 for metres).
-    pub scale: f64,
-    /// Rotations about X, Y, Z in degrees, applied in that order (−90 about X turns a Y-up part
-    /// Z-up).
-    pub rotate_deg: [f64; 3],
-    /// Translation after scaling and rotating, mm.
-    pub translate: DVec3,
-}
-
-impl Default for Placement {
-    fn default() -> Self {
-        Placement { scale: 1.0, rotate_deg: [0.0; 3], translate: DVec3::ZERO }
+/// Parses the bytes of an STL file (`path` names it in errors).
+pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
+    let mesh = if is_binary(bytes) {
+        parse_binary(path, bytes)?
+    } else if starts_with_solid(bytes) {
+        parse_ascii(path, bytes)?
+    } else if bytes.len() < 84 {
+        return Err(Error::input(
+            path,
+            "file",
+            format!(
+                "{} bytes: too short for a binary STL (84 bytes of header) and not ASCII STL (no \"solid\")",
+                bytes.len()
+            ),
+        ));
+    } else {
+        let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
+        return Err(Error::input(
+            path,
+            "file",
+            format!(
+                "not an STL file: not ASCII (does not start with \"solid\") and not binary (the header counts {n} facets, which take {} bytes, but the file has {})",
+                84 + 50 * n,
+                bytes.len()
+            ),
+        ));
+    };
+    if mesh.tris.is_empty() {
+        return Err(Error::input(
+            path,
+            "file",
+            if mesh.dropped > 0 {
+                format!("all {} facets are degenerate (zero area): no surface to machine", mesh.dropped)
+            } else {
+                "the mesh has no facets".to_string()
+            },
+        ));
     }
-}
-
-impl Placement {
-    /// True when it moves nothing.
-    pub fn is_identity(&self) -> bool {
-        *self == Placement::default()
-    }
+    Ok(mesh)
 }
 
 fn is_binary(bytes: &[u8]) -> bool {
@@ -294,6 +207,7 @@ fn parse_ascii(path: &Path, bytes: &[u8]) -> Result<Mesh> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geom::mesh::Placement;
 
     const CUBE_FACETS: [[[f64; 3]; 3]; 2] =
         [[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]], [[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0]]];
@@ -329,9 +243,9 @@ mod tests {
     #[test]
     fn reads_ascii_and_binary_alike() {
         let p = Path::new("t.stl");
-        let a = Mesh::parse(p, ascii(&CUBE_FACETS).as_bytes()).unwrap();
+        let a = parse(p, ascii(&CUBE_FACETS).as_bytes()).unwrap();
         // a binary file whose header starts with "solid" is still binary
-        let b = Mesh::parse(p, &binary(&CUBE_FACETS, b"solid but binary")).unwrap();
+        let b = parse(p, &binary(&CUBE_FACETS, b"solid but binary")).unwrap();
         assert!(!a.binary && b.binary);
         assert_eq!(a.tris, b.tris);
         assert_eq!(a.tris.len(), 2);
@@ -342,22 +256,22 @@ mod tests {
     fn drops_degenerate_facets() {
         let mut f = CUBE_FACETS.to_vec();
         f.push([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0]]);
-        let m = Mesh::parse(Path::new("t.stl"), ascii(&f).as_bytes()).unwrap();
+        let m = parse(Path::new("t.stl"), ascii(&f).as_bytes()).unwrap();
         assert_eq!((m.tris.len(), m.dropped), (2, 1));
-        let e = Mesh::parse(Path::new("t.stl"), ascii(&f[2..]).as_bytes()).unwrap_err().to_string();
+        let e = parse(Path::new("t.stl"), ascii(&f[2..]).as_bytes()).unwrap_err().to_string();
         assert!(e.contains("degenerate"), "{e}");
     }
 
     #[test]
     fn names_the_line_of_a_bad_ascii_facet() {
         let text = ascii(&CUBE_FACETS).replacen("vertex 1 1 0", "vertex 1 x 0", 1);
-        let e = Mesh::parse(Path::new("bad.stl"), text.as_bytes()).unwrap_err().to_string();
+        let e = parse(Path::new("bad.stl"), text.as_bytes()).unwrap_err().to_string();
         assert!(e.starts_with("bad.stl: line 6: vertex coordinate \"x\""), "{e}");
         let text = ascii(&CUBE_FACETS).replacen("endloop", "vertex 0 0 0", 1);
-        let e = Mesh::parse(Path::new("bad.stl"), text.as_bytes()).unwrap_err().to_string();
+        let e = parse(Path::new("bad.stl"), text.as_bytes()).unwrap_err().to_string();
         assert!(e.contains("line 7") && e.contains("more than 3 vertices"), "{e}");
         let text = &ascii(&CUBE_FACETS)[..60];
-        let e = Mesh::parse(Path::new("bad.stl"), text.as_bytes()).unwrap_err().to_string();
+        let e = parse(Path::new("bad.stl"), text.as_bytes()).unwrap_err().to_string();
         assert!(e.contains("unexpected end of file"), "{e}");
     }
 
@@ -365,17 +279,17 @@ mod tests {
     fn names_a_truncated_binary_file() {
         let mut b = binary(&CUBE_FACETS, b"bin");
         b.truncate(b.len() - 7);
-        let e = Mesh::parse(Path::new("cut.stl"), &b).unwrap_err().to_string();
+        let e = parse(Path::new("cut.stl"), &b).unwrap_err().to_string();
         assert!(e.contains("header counts 2 facets, which take 184 bytes, but the file has 177"), "{e}");
         let mut b = binary(&CUBE_FACETS, b"bin");
         b[84 + 12..84 + 16].copy_from_slice(&f32::NAN.to_le_bytes());
-        let e = Mesh::parse(Path::new("nan.stl"), &b).unwrap_err().to_string();
+        let e = parse(Path::new("nan.stl"), &b).unwrap_err().to_string();
         assert!(e.contains("facet 1 (byte 96), vertex 1"), "{e}");
     }
 
     #[test]
     fn places_a_y_up_inch_part() {
-        let mut m = Mesh::parse(Path::new("t.stl"), ascii(&CUBE_FACETS).as_bytes()).unwrap();
+        let mut m = parse(Path::new("t.stl"), ascii(&CUBE_FACETS).as_bytes()).unwrap();
         m.transform(&Placement { scale: 25.4, rotate_deg: [-90.0, 0.0, 0.0], translate: DVec3::new(0.0, 0.0, 1.0) });
         let (lo, hi) = m.bounds().unwrap();
         // (x, y, z) → (x, z, −y)
@@ -385,7 +299,7 @@ mod tests {
 
     #[test]
     fn counts_open_edges() {
-        let m = Mesh::parse(Path::new("t.stl"), ascii(&CUBE_FACETS).as_bytes()).unwrap();
+        let m = parse(Path::new("t.stl"), ascii(&CUBE_FACETS).as_bytes()).unwrap();
         assert_eq!(m.open_edges(1e-6), 6);
     }
 }

@@ -23,12 +23,14 @@
 pub mod edt;
 pub mod exact;
 pub mod grid;
+pub mod heights;
 pub mod raster;
-pub(crate) mod replay;
+pub mod replay;
 pub mod sdf;
 pub mod sweep;
 
-pub use raster::{RasterSim, Replay, Rest, Sample, SampleKind};
+pub use raster::RasterSim;
+pub use replay::{Event, Replay, Rest, Sample, SampleKind};
 pub use sdf::SdfSim;
 
 use crate::error::{Error, Result};

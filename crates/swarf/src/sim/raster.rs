@@ -3,6 +3,7 @@
 use super::SimOptions;
 use super::exact::ExactModel;
 use super::grid::{Grid, ceil_i, floor_i};
+use super::replay::{Replay, Rest};
 use super::sweep::{Fast, Path};
 use crate::error::{Error, Result};
 use crate::geom::index::EdgeIndex;
@@ -19,84 +20,6 @@ pub mod state {
     pub const PART: u8 = 2;
     /// Fixture (forbidden).
     pub const FIXTURE: u8 = 4;
-}
-
-/// What kind of motion an engagement sample was taken on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SampleKind {
-    /// Horizontal cutting.
-    Lateral,
-    /// Descending (ramp, helix).
-    Descending,
-    /// A plunge (360°).
-    Plunge,
-}
-
-/// One engagement sample.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sample {
-    /// Cutting length from the start of the program to this sample, mm.
-    pub s: f64,
-    /// Tool position.
-    pub at: DVec3,
-    /// Exact engagement, degrees.
-    pub tea: f32,
-    /// Engagement by circumference pixels (paper 1 eq. 4), degrees.
-    pub tea_pixel: f32,
-    /// Motion kind.
-    pub kind: SampleKind,
-    /// Inside an entry bore (the entry and the first turn at its bottom).
-    pub bore: bool,
-    /// Length of cutting this sample stands for, mm.
-    pub len: f32,
-    /// Feed of the move, mm/min.
-    pub feed: f32,
-    /// Index of the move.
-    pub mi: u32,
-}
-
-/// A located problem (gouge, collision, plunge).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Event {
-    /// Index of the move in the toolpath.
-    pub move_index: usize,
-    /// Where (end of the move for plunges, the worst point otherwise).
-    pub at: [f64; 3],
-    /// How deep into the part or the material, mm.
-    pub depth: f64,
-}
-
-/// Everything a replay found.
-#[derive(Debug, Clone, Default)]
-pub struct Replay {
-    /// Engagement samples along cutting moves.
-    pub samples: Vec<Sample>,
-    /// Moves that gouge.
-    pub gouges: Vec<Event>,
-    /// Rapid moves through uncut material.
-    pub rapid_collisions: Vec<Event>,
-    /// Plunges into material.
-    pub plunges: Vec<Event>,
-    /// Volume removed, mm³.
-    pub removed_volume: f64,
-    /// Centres of the cells of rest material after the program (filled by the pipeline).
-    pub rest_cells: Vec<DVec2>,
-    /// Cell size of the simulation, mm.
-    pub res: f64,
-}
-
-/// Rest material: reachable material left standing.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
-pub struct Rest {
-    /// Area of the reachable region where material stands more than `tol` above the floor, mm².
-    pub area_mm2: f64,
-    /// Its volume, mm³.
-    pub volume_mm3: f64,
-    /// Its largest thickness, mm.
-    pub max_thickness_mm: f64,
-    /// Area the tool can reach, mm².
-    pub reachable_mm2: f64,
 }
 
 /// Visits the cells within `rho` of the path whose value in `h` stands more than `above` over

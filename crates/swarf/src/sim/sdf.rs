@@ -59,8 +59,8 @@
 //!   floor (the top of the highest slab still holding material there).
 
 use super::SimOptions;
-use super::raster::{Replay, Rest};
 use super::replay::Engine;
+use super::replay::{Replay, Rest};
 use super::sweep::{Fast, Path};
 use crate::error::{Error, Result};
 use crate::geom::index::EdgeIndex;

@@ -34,7 +34,7 @@ pub fn passes(g: &LayerGeom, params: &Params) -> Vec<Pass> {
                 let mut pts = ring.clone();
                 // rings of an area have it on their left; material is inside (left) for
                 // outside-in: climb wants it on the right
-                if params.climb == super::ccw(&pts) {
+                if params.climb == crate::plan::pass::ccw(&pts) {
                     pts.reverse();
                 }
                 out.push(Pass { pts, closed: true, kind: PassKind::Clear, level: -(k as f64), reversible: false });

@@ -5,7 +5,7 @@
 //! ends with the smallest tool, which sets what the sequence can reach (every row of the
 //! paper's Table 2 ends with it). Each tool cuts its own hunting planes (levels every
 //! `depth_of_cut` from the stock top to the floor, plus the part's flats, as
-//! [`crate::zlevel::MeshJob::levels`]).
+//! [`crate::model::MeshJob::levels`]).
 //!
 //! **Per tool, once** (whatever the sequence): at each level, the region of tool centres `C`
 //! (the stock minus the part's shadow above the level grown by the tool radius), its
@@ -41,10 +41,9 @@
 
 use crate::error::{Error, Result};
 use crate::geom::{Area, DVec2, DVec3, segments_intersect};
-use crate::model::{REGION_TOL, Tool};
-use crate::tooldb::{Cost, ToolDb, ToolRun, ToolSpec};
+use crate::model::tooldb::{Cost, ToolDb, ToolRun, ToolSpec};
+use crate::model::{MeshJob, REGION_TOL, Tool};
 use crate::toolpath::{MoveKind, Toolpath};
-use crate::zlevel::MeshJob;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::time::Instant;
@@ -268,7 +267,7 @@ struct Prepared {
     stock: Area,
     top: f64,
     clear_z: f64,
-    machine: crate::tooldb::Machine,
+    machine: crate::model::tooldb::Machine,
     opts: SeqOptions,
 }
 
@@ -472,7 +471,7 @@ fn rest_maps(job: &MeshJob, prep: &Prepared, seq: &[usize]) -> RestMaps {
     let lo = job.stock_lo.truncate();
     let g = crate::sim::grid::Grid::covering(lo, job.stock_hi.truncate(), 0.0, res, lo);
     let floor = (job.floor + job.allowance_floor) as f32;
-    let part: Vec<f32> = crate::mesh::height_map(&job.mesh, &g)
+    let part: Vec<f32> = crate::sim::heights::height_map(&job.mesh, &g)
         .into_iter()
         .map(|h| (h + job.allowance_floor as f32).max(floor))
         .collect();
@@ -522,14 +521,14 @@ fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<Prepared> {
     zs.dedup();
     let debug = std::env::var("SWARF_DEBUG").is_ok();
     let t0 = Instant::now();
-    let mut shadows = crate::mesh::Shadows::new(&job.mesh);
+    let mut shadows = crate::geom::mesh::Shadows::new(&job.mesh);
     let keeps: Vec<Area> = zs
         .iter()
         .map(|&z| {
             let ta = Instant::now();
             let sh = shadows.down_to(z - job.allowance_floor);
             let tb = ta.elapsed().as_secs_f64();
-            let k = crate::zlevel::keep_of(sh, job.allowance);
+            let k = crate::model::keep_of(sh, job.allowance);
             if debug {
                 eprintln!(
                     "toolseq: shadow z {z:.3} {} vertices {} rings {} polys, {tb:.3} s, keep {:.3} s",

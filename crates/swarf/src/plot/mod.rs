@@ -5,9 +5,11 @@
 
 use crate::error::{Error, Result};
 use crate::geom::{Area, DVec2};
-use crate::sim::raster::{Replay, SampleKind};
+use crate::sim::{Replay, SampleKind};
 use crate::toolpath::{Motion, Toolpath};
 use std::fmt::Write;
+
+pub mod shape;
 
 /// What to draw.
 pub struct Figure<'a> {

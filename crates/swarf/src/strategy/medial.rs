@@ -45,14 +45,14 @@
 //! Circles smaller than [`RHO_MIN`] are not cut (the tip of a branch into a sharp corner).
 //! Every arc is at most a half turn (G2/G3 with distinct ends).
 
-use super::Linker;
 use crate::error::{Error, Result};
 use crate::geom::DVec2;
 use crate::geom::medial::{Axis, medial_axis};
 use crate::model::{Job, Regions};
+use crate::plan::Linker;
+use crate::plan::{LANDING_MARGIN, LayerGeom, Params, Pass};
 use crate::sim::SimOptions;
 use crate::sim::sweep::Path;
-use crate::strategy::{LayerGeom, Params, Pass};
 use crate::toolpath::{MoveKind, Toolpath};
 use std::f64::consts::{PI, TAU};
 
@@ -581,7 +581,7 @@ fn rejoin(l: &mut Linker, k: &Circle, a_out: f64, z: f64, s: f64) -> Option<f64>
     const N: usize = 72;
     let landing = (0..N)
         .map(|j| a_out - s * TAU * j as f64 / N as f64)
-        .find(|a| l.top_near(on(k, *a), l.r + crate::strategy::LANDING_MARGIN) <= z + 0.01)?;
+        .find(|a| l.top_near(on(k, *a), l.r + LANDING_MARGIN) <= z + 0.01)?;
     arrive(l, on(k, landing), z);
     arc(l, k, landing, sweep(landing, a_out, s), s, z);
     Some(a_out)
@@ -598,7 +598,7 @@ fn arrive(l: &mut Linker, p: DVec2, z: f64) {
             return;
         }
     }
-    let top = l.top_near(p, l.r + crate::strategy::LANDING_MARGIN).max(z);
+    let top = l.top_near(p, l.r + LANDING_MARGIN).max(z);
     l.travel(p, top + l.params.approach);
     l.push_line(MoveKind::Descend, p.extend(z), l.feed);
     l.down_at = Some(z);
@@ -611,7 +611,7 @@ fn enter(l: &mut Linker, k: &Circle, z: f64, step: f64, s: f64) -> f64 {
     let a = k.rho.min(0.5 * l.r);
     let a0: f64 = 0.0;
     let p = k.c + a * DVec2::new(a0.cos(), a0.sin());
-    let clear = l.top_near(p, l.r + crate::strategy::LANDING_MARGIN) <= z + 0.01;
+    let clear = l.top_near(p, l.r + LANDING_MARGIN) <= z + 0.01;
     let phi = if clear {
         arrive(l, p, z);
         a0

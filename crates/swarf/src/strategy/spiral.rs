@@ -39,22 +39,22 @@
 //! **The floor.** Where a level curves tightly the engagement limit asks for a small gap; it
 //! is never asked below a floor (a fraction of the stepover), or every turn of a level with a
 //! sharp tip would crawl. A wide floor is fast and engages the tool more in tight turns.
-//! Unless a floor or a constant ζ is given, [`crate::pipeline::optimise_spiral`] chooses it:
+//! Unless a floor or a constant ζ is given, [`super::spiral_search::optimise_spiral`] chooses it:
 //! the loop of §4, Figs. 8–9, which plans a spiral for each candidate (floors, and with
 //! `--optimise` start points), simulates them fastest first, and keeps the first that clears
 //! the pocket within the engagement bound.
 
-use super::Linker;
 use crate::error::{Error, Result};
 use crate::geom::arcfit::Piece;
 use crate::geom::{Area, DVec2, biarc};
-use crate::implicit::draw::Grid;
+use crate::implicit::levels::Grid;
 use crate::implicit::oscillator::{Damping, EngagementLimit, Spiral, SpiralOptions, Turn, spiral};
 use crate::implicit::region::AreaField;
 use crate::implicit::shape::{Field, maximum};
 use crate::model::{Job, Regions};
+use crate::plan::Linker;
+use crate::plan::{LayerGeom, Params, Pass};
 use crate::sim::SimOptions;
-use crate::strategy::{LayerGeom, Params, Pass};
 use crate::toolpath::{MoveKind, Toolpath};
 use std::f64::consts::TAU;
 
@@ -85,7 +85,7 @@ pub const CORNER_CUT: f64 = 0.02;
 /// [`EngagementLimit::floor`]). Where levels turn tighter than the floor allows (the hairpin
 /// tips of the levels creeping along an L's legs, the levels near a polygon's corners) the
 /// engagement rises above the reference; a `rough` job chooses the floor among [`FLOORS`] by
-/// simulation unless one is given ([`crate::pipeline::optimise_spiral`]).
+/// simulation unless one is given ([`super::spiral_search::optimise_spiral`]).
 pub const ENGAGEMENT_FLOOR: f64 = 0.35;
 
 /// How a spiral is made: the damping and the start.
@@ -421,7 +421,7 @@ fn cut_piece(l: &mut Linker, p: &PiecePath, z: f64) {
     }
 }
 
-/// One candidate of [`crate::pipeline::optimise_spiral`] and what was found out about it.
+/// One candidate of [`super::spiral_search::optimise_spiral`] and what was found out about it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Trial {
     /// The choice.
@@ -456,11 +456,11 @@ impl Trial {
 /// The floors ([`SpiralChoice::floor`]) the optimiser tries, widest first.
 pub const FLOORS: [f64; 6] = [0.5, 0.42, 0.35, 0.28, 0.22, 0.16];
 
-/// The candidates [`crate::pipeline::optimise_spiral`] tries: ζ per level with each of
+/// The candidates [`super::spiral_search::optimise_spiral`] tries: ζ per level with each of
 /// [`FLOORS`], from `start` (`None`: the maximum of `f`), and with `around` also from four
 /// points round the maximum (a third of the way to the boundary). (A constant ζ is not among
 /// them: where it keeps the engagement it is slower than ζ per level on every case measured,
-/// see [`crate::pipeline::best_fixed_zeta`].)
+/// see [`super::spiral_search::best_fixed_zeta`].)
 pub fn candidates(
     regions: &Regions,
     geom: &LayerGeom,

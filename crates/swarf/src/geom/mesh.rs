@@ -1,4 +1,5 @@
-//! Slicing a triangle mesh for 3-axis z-level roughing (paper 3 §2: the "hunting planes").
+//! Triangle meshes (the parts of 3D jobs, read by [`crate::io::stl`]), their placement, and
+//! slicing them for 3-axis z-level roughing (paper 3 §2: the "hunting planes").
 //!
 //! A flat end mill whose tip is at height `z` touches everything within its radius at or above
 //! `z`, so at a level the tool must keep its axis a radius away from the **shadow** of the part
@@ -11,14 +12,99 @@
 //! from the edge's two end points taken in a fixed order, so neighbouring facets share the cut
 //! points bit for bit.
 //!
-//! The part's **height map** (the highest facet over each cell centre) is what a simulator needs
-//! to find gouges and rest material ([`height_map`]).
+//! The part's height map, which the simulators read, is [`crate::sim::heights::height_map`].
 
-use crate::geom::area::Fill;
-use crate::geom::{Area, DVec2, DVec3};
-use crate::io::stl::Mesh;
-use crate::sim::grid::Grid;
+use super::area::Fill;
+use super::{Area, DVec2, DVec3};
 use rayon::prelude::*;
+
+/// A triangle soup with what reading it found.
+#[derive(Debug, Clone, Default)]
+pub struct Mesh {
+    /// Triangles, vertices counter-clockwise seen from outside.
+    pub tris: Vec<[DVec3; 3]>,
+    /// Facets dropped as degenerate (zero area or repeated vertices).
+    pub dropped: usize,
+    /// True when the file was binary.
+    pub binary: bool,
+}
+
+impl Mesh {
+    /// Bounding box (min, max); `None` when empty.
+    pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
+        let mut it = self.tris.iter().flatten();
+        let first = *it.next()?;
+        Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
+    }
+
+    /// Applies a placement: scale, then rotations about X, Y and Z (degrees, right-handed, in
+    /// that order), then a translation. A mirroring scale (negative) keeps the facets facing
+    /// outwards by reversing their vertex order.
+    pub fn transform(&mut self, t: &Placement) {
+        let (sx, cx) = t.rotate_deg[0].to_radians().sin_cos();
+        let (sy, cy) = t.rotate_deg[1].to_radians().sin_cos();
+        let (sz, cz) = t.rotate_deg[2].to_radians().sin_cos();
+        let f = |p: DVec3| {
+            let p = p * t.scale;
+            let p = DVec3::new(p.x, cx * p.y - sx * p.z, sx * p.y + cx * p.z);
+            let p = DVec3::new(cy * p.x + sy * p.z, p.y, -sy * p.x + cy * p.z);
+            let p = DVec3::new(cz * p.x - sz * p.y, sz * p.x + cz * p.y, p.z);
+            p + t.translate
+        };
+        for tri in &mut self.tris {
+            for v in tri.iter_mut() {
+                *v = f(*v);
+            }
+            if t.scale < 0.0 {
+                tri.swap(1, 2);
+            }
+        }
+    }
+
+    /// Edges used by exactly one facet (after welding vertices that coincide within `tol`): zero
+    /// for a closed surface.
+    pub fn open_edges(&self, tol: f64) -> usize {
+        use std::collections::HashMap;
+        let key = |p: DVec3| ((p.x / tol).round() as i64, (p.y / tol).round() as i64, (p.z / tol).round() as i64);
+        let mut count: HashMap<_, i32> = HashMap::new();
+        for t in &self.tris {
+            for k in 0..3 {
+                let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
+                if a == b {
+                    continue;
+                }
+                let e = if a < b { (a, b) } else { (b, a) };
+                *count.entry(e).or_default() += 1;
+            }
+        }
+        count.values().filter(|&&c| c == 1).count()
+    }
+}
+
+/// Where a mesh goes: `p' = Rz·Ry·Rx·(scale·p) + translate`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// Uniform scale (25.4 for a part drawn in inches, 1000 for metres).
+    pub scale: f64,
+    /// Rotations about X, Y, Z in degrees, applied in that order (−90 about X turns a Y-up part
+    /// Z-up).
+    pub rotate_deg: [f64; 3],
+    /// Translation after scaling and rotating, mm.
+    pub translate: DVec3,
+}
+
+impl Default for Placement {
+    fn default() -> Self {
+        Placement { scale: 1.0, rotate_deg: [0.0; 3], translate: DVec3::ZERO }
+    }
+}
+
+impl Placement {
+    /// True when it moves nothing.
+    pub fn is_identity(&self) -> bool {
+        *self == Placement::default()
+    }
+}
 
 /// Holes of a shadow smaller than this are filled, mm².
 const PINHOLE: f64 = 1e-3;
@@ -119,63 +205,6 @@ fn clip(poly: &[DVec3], h: f64, above: bool) -> Vec<DVec3> {
     out
 }
 
-/// The highest facet over each cell centre of `grid` (−∞ where there is none), row-major.
-pub fn height_map(mesh: &Mesh, grid: &Grid) -> Vec<f32> {
-    let mut h = vec![f32::NEG_INFINITY; grid.len()];
-    // rows in parallel: each row scans the facets whose y-range covers it
-    let mut by_row: Vec<Vec<usize>> = vec![Vec::new(); grid.ny];
-    for (ti, t) in mesh.tris.iter().enumerate() {
-        let ylo = t[0].y.min(t[1].y).min(t[2].y);
-        let yhi = t[0].y.max(t[1].y).max(t[2].y);
-        let j0 = ((ylo - grid.y0) / grid.res - 0.5).ceil().max(0.0) as usize;
-        let j1 = ((yhi - grid.y0) / grid.res - 0.5).floor();
-        if j1 < 0.0 {
-            continue;
-        }
-        for row in by_row.iter_mut().take((j1 as usize + 1).min(grid.ny)).skip(j0) {
-            row.push(ti);
-        }
-    }
-    h.par_chunks_mut(grid.nx).zip(by_row.par_iter()).enumerate().for_each(|(j, (row, tris))| {
-        let y = grid.y0 + (j as f64 + 0.5) * grid.res;
-        for &ti in tris {
-            let t = &mesh.tris[ti];
-            // the facet's span on this row: intersect the line y with its edges
-            let mut xs = [0.0f64; 3];
-            let mut zs = [0.0f64; 3];
-            let mut n = 0;
-            for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                if (a.y <= y) != (b.y <= y) {
-                    let u = (y - a.y) / (b.y - a.y);
-                    xs[n] = a.x + (b.x - a.x) * u;
-                    zs[n] = a.z + (b.z - a.z) * u;
-                    n += 1;
-                    if n == 2 {
-                        break;
-                    }
-                }
-            }
-            if n < 2 {
-                continue;
-            }
-            let (xa, za, xb, zb) =
-                if xs[0] <= xs[1] { (xs[0], zs[0], xs[1], zs[1]) } else { (xs[1], zs[1], xs[0], zs[0]) };
-            let i0 = ((xa - grid.x0) / grid.res - 0.5).ceil().max(0.0) as usize;
-            let i1 = ((xb - grid.x0) / grid.res - 0.5).floor();
-            if i1 < 0.0 {
-                continue;
-            }
-            for (i, cell) in row.iter_mut().enumerate().take((i1 as usize + 1).min(grid.nx)).skip(i0) {
-                let x = grid.x0 + (i as f64 + 0.5) * grid.res;
-                let z = if xb - xa > 1e-12 { za + (zb - za) * (x - xa) / (xb - xa) } else { za.max(zb) };
-                *cell = cell.max(z as f32);
-            }
-        }
-    });
-    h
-}
-
 /// Heights of the facets that face straight up (flats: floors and tops of islands), highest
 /// first, each once (within `tol`).
 pub fn flats(mesh: &Mesh, tol: f64) -> Vec<f64> {
@@ -194,11 +223,11 @@ pub fn flats(mesh: &Mesh, tol: f64) -> Vec<f64> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A closed box [0,10]×[0,10]×[0,h] with a square hole [3,7]² down to `floor`, as facets.
-    fn pocket_block(h: f64, floor: f64) -> Mesh {
+    pub(crate) fn pocket_block(h: f64, floor: f64) -> Mesh {
         let mut tris = Vec::new();
         let mut quad = |a: DVec3, b: DVec3, c: DVec3, d: DVec3| {
             tris.push([a, b, c]);
@@ -241,20 +270,6 @@ mod tests {
         let a = s.down_to(3.0).area();
         assert!((a - 100.0).abs() < 1e-6, "{a}");
         assert_eq!(s.down_to(3.0).components().len(), 1);
-    }
-
-    #[test]
-    fn height_map_reads_the_top_surface() {
-        let m = pocket_block(10.0, 4.0);
-        let g = Grid { x0: -1.0, y0: -1.0, res: 0.5, nx: 24, ny: 24 };
-        let h = height_map(&m, &g);
-        let at = |x: f64, y: f64| {
-            let (i, j) = g.cell_of(DVec2::new(x, y)).unwrap();
-            h[j * g.nx + i]
-        };
-        assert_eq!(at(1.1, 1.1), 10.0);
-        assert_eq!(at(5.1, 5.1), 4.0);
-        assert_eq!(at(-0.6, 5.1), f32::NEG_INFINITY);
     }
 
     #[test]

@@ -55,7 +55,7 @@
 //! the part. A start that removes next to nothing is not tried again on that level. Links between
 //! passes stay down through cleared space (rapids at depth, fed while the tool leaves the material
 //! it touches) — straight when the way is clear, round the material by a way through cleared
-//! space when that is quicker than lifting (see [`super::route`]) — or lift over it (see
+//! space when that is quicker than lifting (see [`crate::plan::route`]) — or lift over it (see
 //! [`super`]); a way of at most 1.5 stepovers that crosses only a little material (its engagement,
 //! read against the stock as it is, within the step's slack) is cut instead. A helix start needs
 //! at least 5 % of a tool disk of material within a diameter of its centre. Because the model
@@ -81,21 +81,19 @@
 //! The bound is not met everywhere yet — see `docs/RESULTS.md` for the case and the random
 //! pockets where the clean-up passes or a tight pocket still exceed it.
 
-use super::Linker;
 use crate::error::Result;
 use crate::geom::index::EdgeIndex;
 use crate::geom::simplify::douglas_peucker;
 use crate::geom::{DVec2, polyline_length, wrap_pi};
 use crate::model::{Job, Regions};
+use crate::plan::Linker;
+use crate::plan::{DP_TOL, LANDING_MARGIN, LayerGeom, Params, Pass};
 use crate::sim::SimOptions;
 use crate::sim::edt;
 use crate::sim::sweep::Path;
-use crate::strategy::{LayerGeom, Params, Pass};
 use crate::toolpath::{MoveKind, Toolpath};
 use std::f64::consts::{FRAC_PI_2, TAU};
 
-/// Douglas–Peucker tolerance for adaptive passes, mm.
-pub const DP_TOL: f64 = 0.002;
 /// How much above the reference a constant-engagement step may read before it is steered away
 /// from the material, degrees.
 const STEP_SLACK_DEG: f64 = 3.0;
@@ -179,7 +177,7 @@ pub(super) fn adaptive_levels<'a>(
         }
         eng.l.tp.note(format!("clean-up at z {z:.3}"));
         eng.l.down_at = None;
-        for p in super::order(&extra, eng.l.tp.end().truncate()) {
+        for p in crate::plan::linker::order(&extra, eng.l.tp.end().truncate()) {
             eng.l.pass(p, *z);
         }
     }
@@ -585,7 +583,7 @@ impl<'a, 'b> Engine<'a, 'b> {
 
     /// How far from a landing point the material is looked for (see [`Self::clear`]).
     fn landing_reach(&self) -> f64 {
-        self.r + crate::strategy::LANDING_MARGIN + 1.5 * self.l.sim.grid.res
+        self.r + LANDING_MARGIN + 1.5 * self.l.sim.grid.res
     }
 
     /// A tool centre that is clear, allowed and within a few cells of remaining material,

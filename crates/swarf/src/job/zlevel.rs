@@ -1,0 +1,173 @@
+//! Z-level roughing of a part given as a mesh (paper 3, El-Midany et al.: §2 hunting planes,
+//! §3 Algorithms 1–2).
+//!
+//! The stock is cut in slices from the top. Each level `z` is a 2.5D job: the material is the
+//! stock, the part to keep is the shadow of the mesh above the level ([`crate::geom::mesh::Shadows`],
+//! grown by the allowance), and any 2.5D strategy of swarf (adaptive, offset, zigzag) plans it.
+//! The offset strategy is paper 3's Algorithm 1 (repeated inward offsets of the part contours);
+//! its accessible area (Algorithm 2, the opening of the level's material by the tool disk) is
+//! the `reachable` region of the level's [`crate::model::Regions`].
+//!
+//! Levels are the step-downs from the stock top to the floor plus one at every flat of the
+//! part (the height of each upward facet, raised by the floor allowance), so that floors and
+//! the tops of islands are not left a step-down thick.
+//!
+//! One material model follows the whole job: each level is planned on the stock that the levels
+//! above left (through [`crate::sim::SimOptions::heights`]), so its links and entries see the
+//! material the levels above could not reach, and the program's replay for the report reads
+//! the part's surface from the mesh ([`crate::sim::heights::height_map`]), so a gouge anywhere on the
+//! surface is found.
+
+use super::rough::{About, RoughOptions, RoughResult, Stage, finish, validate_params};
+use crate::error::{Error, Result};
+use crate::geom::DVec3;
+use crate::model::{MeshJob, keep_of};
+use crate::post;
+use crate::sim::raster::RasterSim;
+use crate::sim::sweep::Path;
+use crate::sim::{HeightMap, SimOptions};
+use crate::toolpath::Toolpath;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Cuts every move of `tp` into `sim` (no measurements).
+fn cut_all(sim: &mut RasterSim, tp: &Toolpath) {
+    for (from, m) in tp.segments() {
+        sim.cut_move(&Path::of(from, m));
+    }
+}
+
+/// Plans the z-level program of `job` (no posting, no simulation).
+pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -> Result<(Toolpath, Vec<f64>)> {
+    job.validate()?;
+    validate_params(&opts.params)?;
+    let debug = std::env::var("SWARF_DEBUG").is_ok();
+    let t0 = Instant::now();
+    let zs = job.levels();
+    let mut shadows = crate::geom::mesh::Shadows::new(&job.mesh);
+    let mut state = crate::sim::heights::mesh_model(job, &opts.sim)?;
+    let safe_z = job.top() + opts.params.clearance;
+    let mut out: Option<Toolpath> = None;
+    let mut done = Vec::new();
+    for (i, &z) in zs.iter().enumerate() {
+        progress(i as f64 / zs.len() as f64);
+        let ts = Instant::now();
+        let shadow = shadows.down_to(z - job.allowance_floor);
+        let t_shadow = ts.elapsed().as_secs_f64();
+        let keep = keep_of(shadow, job.allowance);
+        if debug {
+            eprintln!(
+                "shadow at z {z:.3}: {} vertices in {t_shadow:.3} s, keep {} vertices ({} rings) in {:.3} s",
+                shadow.vertex_count(),
+                keep.vertex_count(),
+                keep.rings().count(),
+                ts.elapsed().as_secs_f64() - t_shadow
+            );
+        }
+        let lj = job.level_job(&keep, z);
+        // the level is planned on what the levels above left
+        let heights = HeightMap { grid: state.grid, stock: state.heights().to_vec(), part: None };
+        let lopts = RoughOptions {
+            // (rapids at depth cross whole levels of cleared stock: checked against the
+            // surely cut heights)
+            sim: SimOptions { heights: Some(Arc::new(heights)), sure_links: true, ..opts.sim.clone() },
+            params: crate::plan::Params { corner_fillets: false, full_wall_contour: true, ..opts.params.clone() },
+            ..opts.clone()
+        };
+        let planned = match super::rough::plan(&lj, &lopts) {
+            Ok(p) => p,
+            // a level with nothing the tool can reach
+            Err(Error::Param { .. }) if lj.regions(job.radius(), 0.0).map_or(true, |r| r.reachable.is_empty()) => None,
+            Err(e) => return Err(e),
+        };
+        let Some(p) = planned else { continue };
+        let mut tp = p.toolpath;
+        // (each level's program ends with its retract to the safe height, where the next
+        // level's travel starts)
+        tp.notes.retain(|n| !n.text.starts_with("level ") && !n.text.starts_with("end:"));
+        if debug {
+            eprintln!(
+                "z-level {} of {} at z {z:.3}: {} moves, {:.2} s",
+                i + 1,
+                zs.len(),
+                tp.moves.len(),
+                t0.elapsed().as_secs_f64()
+            );
+        }
+        if tp.moves.iter().all(|m| m.is_rapid()) {
+            continue;
+        }
+        cut_all(&mut state, &tp);
+        done.push(z);
+        match &mut out {
+            None => {
+                let mut first = Toolpath::new(job.tool.clone(), tp.start, safe_z);
+                first.note(format!("z-level {}: z {z:.3}", done.len()));
+                append(&mut first, tp, safe_z);
+                out = Some(first);
+            }
+            Some(all) => {
+                all.note(format!("z-level {}: z {z:.3}", done.len()));
+                append(all, tp, safe_z);
+            }
+        }
+    }
+    progress(1.0);
+    let mut tp = out.ok_or_else(|| {
+        Error::param("stock_box", "nothing to cut: the part fills the stock, or the tool reaches no material")
+    })?;
+    let end = tp.end();
+    if end.z < safe_z - 1e-9 {
+        tp.note("end: retract");
+        tp.rapid(DVec3::new(end.x, end.y, safe_z));
+    }
+    Ok((tp, done))
+}
+
+/// Appends a level's program: a rapid at the safe height to above its start, then its moves.
+fn append(all: &mut Toolpath, tp: Toolpath, safe_z: f64) {
+    let end = all.end();
+    if (end.truncate() - tp.start.truncate()).length() > 1e-9 || (end.z - tp.start.z).abs() > 1e-9 {
+        if end.z < safe_z - 1e-9 {
+            all.rapid(DVec3::new(end.x, end.y, safe_z));
+        }
+        all.rapid(DVec3::new(tp.start.x, tp.start.y, safe_z));
+        if tp.start.z < safe_z - 1e-9 {
+            all.rapid(tp.start);
+        }
+    }
+    let base = all.moves.len();
+    for n in tp.notes {
+        all.notes.push(crate::toolpath::Note { at: base + n.at, text: n.text });
+    }
+    all.moves.extend(tp.moves);
+}
+
+/// Roughs a mesh job: plans, posts and (optionally) simulates it for the report.
+pub fn rough(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64)) -> Result<RoughResult> {
+    if opts.sim.engine != crate::sim::SimEngine::Raster && opts.simulate {
+        return Err(Error::param("--sim", "the distance-field simulator handles 2.5D jobs only; use --sim raster"));
+    }
+    let t0 = Instant::now();
+    progress(Stage::Plan, 0.0);
+    let (mut toolpath, zs) = plan(job, opts, &mut |f| progress(Stage::Plan, f))?;
+    toolpath.quantize(post::COORD_STEP, post::CENTER_STEP);
+    let compute_s = t0.elapsed().as_secs_f64();
+    progress(Stage::Plan, 1.0);
+    let about = About {
+        name: &job.name,
+        what: "z-level roughing, ",
+        tool_diameter: job.tool.diameter,
+        width: job.width,
+        floor: job.floor,
+        feed: job.feed,
+        spindle_rpm: job.spindle_rpm,
+        rapid_rate: job.rapid_rate,
+    };
+    finish(toolpath, zs, &about, opts, compute_s, progress, |tp, progress| {
+        let mut sim = crate::sim::heights::mesh_model(job, &opts.sim)?;
+        let mut rp = sim.replay(tp, &mut |f| progress(Stage::Simulate, f));
+        rp.res = sim.grid.res;
+        Ok((rp, crate::sim::heights::mesh_rest(job, &sim)))
+    })
+}

@@ -1,0 +1,171 @@
+//! A 3-axis roughing job on a mesh part (paper 3): the part placed in a stock box, the cutting
+//! data, and the levels it is cut at.
+
+use super::{Job, REGION_TOL, Tool, Width};
+use crate::error::{Error, Result};
+use crate::geom::mesh::Mesh;
+use crate::geom::{Area, DVec3};
+
+/// A 3-axis roughing job on a mesh part.
+#[derive(Debug, Clone)]
+pub struct MeshJob {
+    /// A short name (the input's file stem).
+    pub name: String,
+    /// The part, placed in machine coordinates.
+    pub mesh: Mesh,
+    /// Stock box, lower corner.
+    pub stock_lo: DVec3,
+    /// Stock box, upper corner.
+    pub stock_hi: DVec3,
+    /// Lowest level, mm (the stock bottom unless set).
+    pub floor: f64,
+    /// Stock to leave on the part, sideways (mm).
+    pub allowance: f64,
+    /// Stock to leave on the part, above floors and tops (mm).
+    pub allowance_floor: f64,
+    /// The tool.
+    pub tool: Tool,
+    /// Width of cut.
+    pub width: Width,
+    /// Largest depth of one level, mm.
+    pub stepdown: f64,
+    /// Cutting feed, mm/min.
+    pub feed: f64,
+    /// Rapid rate for time estimates, mm/min.
+    pub rapid_rate: f64,
+    /// Spindle speed, rpm.
+    pub spindle_rpm: f64,
+}
+
+/// The shadow is grown by this (mm): it closes the hairline gaps between the shadow and a stock
+/// box drawn at the part's bounds (a mesh in single precision, scaled from inches, stops a few
+/// hundred-thousandths short of them), which the planner would otherwise crawl round as
+/// material. It leaves that much more stock on the part (under the 0.01 mm tolerance of the
+/// rest and gouge checks).
+const SHADOW_GROW: f64 = 0.003;
+
+/// Douglas–Peucker tolerance of the shadows (mm); the keep is grown by as much.
+const SHADOW_SIMPLIFY: f64 = 0.004;
+
+/// Levels closer than this are one level, mm.
+const LEVEL_MERGE: f64 = 0.02;
+
+impl MeshJob {
+    /// Checks the numbers a user gives.
+    pub fn validate(&self) -> Result<()> {
+        crate::model::check_tool_and_width(&self.tool, self.width)?;
+        if !(self.stepdown.is_finite() && self.stepdown > 0.0) {
+            return Err(Error::param("stepdown", format!("{} mm: must be positive", self.stepdown)));
+        }
+        let size = self.stock_hi - self.stock_lo;
+        if !(size.x > 0.0 && size.y > 0.0 && size.z > 0.0 && size.is_finite()) {
+            return Err(Error::param("stock_box", "the box must have positive width, length and height"));
+        }
+        if !(self.floor.is_finite() && self.floor + self.allowance_floor < self.stock_hi.z) {
+            return Err(Error::param(
+                "floor",
+                format!(
+                    "{} mm (+ {} mm floor allowance): must be below the stock top {}",
+                    self.floor, self.allowance_floor, self.stock_hi.z
+                ),
+            ));
+        }
+        for (name, v) in [("allowance", self.allowance), ("allowance_floor", self.allowance_floor)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::param(name, format!("{v} mm: must be zero or positive")));
+            }
+        }
+        for (name, v) in [("feed", self.feed), ("rapid_rate", self.rapid_rate), ("spindle", self.spindle_rpm)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::param(name, format!("{v}: must be positive")));
+            }
+        }
+        Ok(())
+    }
+
+    /// Tool radius.
+    pub fn radius(&self) -> f64 {
+        self.tool.radius()
+    }
+
+    /// The stock outline.
+    pub fn stock_area(&self) -> Area {
+        Area::rect(self.stock_lo.x, self.stock_lo.y, self.stock_hi.x, self.stock_hi.y)
+    }
+
+    /// The part's outline seen from above (its shadow at the floor).
+    pub fn outline(&self) -> Area {
+        crate::geom::mesh::Shadows::new(&self.mesh).down_to(self.floor - self.allowance_floor).clone()
+    }
+
+    /// Highest point of the part with its allowance, or the stock top when the part is lower.
+    pub fn top(&self) -> f64 {
+        self.mesh.bounds().map_or(self.stock_hi.z, |(_, hi)| (hi.z + self.allowance_floor).max(self.stock_hi.z))
+    }
+
+    /// The levels, top down: step-downs of at most `stepdown` from the stock top to the floor
+    /// (raised by the floor allowance), and the flats of the part (raised by as much) between
+    /// them.
+    pub fn levels(&self) -> Vec<f64> {
+        self.levels_every(self.stepdown)
+    }
+
+    /// The levels as [`MeshJob::levels`] with step-downs of at most `stepdown`.
+    pub fn levels_every(&self, stepdown: f64) -> Vec<f64> {
+        let top = self.stock_hi.z;
+        // (the floor is protected like the part: with its allowance on top)
+        let bottom = self.floor + self.allowance_floor;
+        let n = (((top - bottom) / stepdown) - 1e-9).ceil().max(1.0) as usize;
+        let mut zs: Vec<f64> =
+            (1..=n).map(|i| if i == n { bottom } else { top - (top - bottom) * i as f64 / n as f64 }).collect();
+        for f in crate::geom::mesh::flats(&self.mesh, 1e-6) {
+            let z = f + self.allowance_floor;
+            if z < top - LEVEL_MERGE && z > bottom + LEVEL_MERGE {
+                zs.push(z);
+            }
+        }
+        zs.sort_by(|a, b| b.total_cmp(a));
+        zs.dedup_by(|a, b| (*b - *a).abs() <= LEVEL_MERGE);
+        zs
+    }
+
+    /// The 2.5D job of one level: the stock box, the part's shadow above it as the part.
+    pub(crate) fn level_job(&self, keep: &Area, z: f64) -> Job {
+        Job {
+            name: self.name.clone(),
+            stock: self.stock_area(),
+            stock_top: self.stock_hi.z,
+            part: keep.clone(),
+            part_top: self.top(),
+            fixtures: Area::empty(),
+            floor: z,
+            allowance: 0.0,
+            allowance_floor: 0.0,
+            tool: self.tool.clone(),
+            width: self.width,
+            stepdown: None,
+            feed: self.feed,
+            rapid_rate: self.rapid_rate,
+            spindle_rpm: self.spindle_rpm,
+        }
+    }
+
+    /// A 2.5D job over the whole stock without a part, for the job's material model.
+    pub(crate) fn model_job(&self) -> Job {
+        let mut j = self.level_job(&Area::empty(), self.floor + self.allowance_floor);
+        j.part_top = self.stock_hi.z;
+        j
+    }
+}
+
+/// The region a level must not enter: the shadow grown by the allowance. The union of
+/// thousands of facets has a vertex wherever two of them meet, so the shadow is simplified
+/// within [`SHADOW_SIMPLIFY`] and grown by as much (the keep only grows, and the offsets of the
+/// regions take a fraction of the time); the offset's output, which has runs of points a few µm
+/// apart where its joins overlapped, is simplified within 1 µm after growing by 1 µm more.
+pub(crate) fn keep_of(shadow: &Area, allowance: f64) -> Area {
+    shadow
+        .simplified(SHADOW_SIMPLIFY)
+        .offset(allowance + SHADOW_GROW + SHADOW_SIMPLIFY + 0.001, REGION_TOL)
+        .simplified(0.001)
+}

@@ -1,0 +1,14 @@
+//! The job model: part, stock, fixtures and free space (paper 1 §4), the tool and the cutting
+//! data, the derived regions every strategy works with, mesh jobs (paper 3) and the tool
+//! database of the tool-sequence search.
+
+mod cutting;
+mod job;
+mod mesh_job;
+pub mod tooldb;
+
+pub(crate) use cutting::check_tool_and_width;
+pub use cutting::{Tool, Width};
+pub use job::{Job, REGION_TOL, Regions, farthest_point};
+pub use mesh_job::MeshJob;
+pub(crate) use mesh_job::keep_of;

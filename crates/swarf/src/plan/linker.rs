@@ -1,0 +1,723 @@
+//! Linking: turns passes into a program — entries, links, retracts — while keeping a raster
+//! model of the material up to date so that every decision is made against what is really left.
+//!
+//! For each pass, in order:
+//! 1. If the tool is down at this level and the straight way to the pass start is free of the
+//!    part: through cleared space it stays down — a rapid at depth, as FreeCAD's Adaptive links
+//!    (`LiftDistance` 0), after a short feed move while the tool still touches the material it
+//!    just cut; with `feed_links`, a feed move (a rapid lifted by a hair when long) for
+//!    controls whose G0 is not straight. Through material only when the step is short (a
+//!    stepover), as a cut.
+//! 2. Otherwise the tool goes up just as far as it must — the *minimum retract*: the approach
+//!    height above the highest material along the way, the safe height only when even that is
+//!    not clear — over to the start, and down (the adaptive strategy first looks for a way at
+//!    depth round the material through cleared space, see [`route`], and takes it when it costs
+//!    less time than the lift):
+//!    - a rapid to just above the material and a descent at the cutting feed (the tool touches
+//!      nothing on the way down) when the tool lands in free space or cleared space (a lateral
+//!      entry from outside the stock);
+//!    - otherwise a **helix** around the start when one fits between the part walls, then one
+//!      full turn at depth (paper 1 §4.5: the distance-transform maximum is where a helix fits;
+//!      closed passes are started at their point farthest from the walls);
+//!    - otherwise a **ramp** zigzagging along the start of the pass;
+//!    - a **plunge** only when neither fits; plunges are counted and reported.
+//! 3. The pass itself, arc-fitted into lines and arcs, is cut into the model.
+
+use super::pass::{LANDING_MARGIN, Params, Pass, PassKind};
+use crate::error::Result;
+use crate::geom::arcfit::{self, Piece};
+use crate::geom::{DVec2, DVec3, polyline_length};
+use crate::model::{Job, Regions};
+use crate::sim::SimOptions;
+use crate::sim::raster::RasterSim;
+use crate::sim::sweep::Path;
+use crate::toolpath::{MoveKind, Toolpath};
+
+use super::route;
+
+/// Builds the program from the passes of each level (`levels[i] = (z, passes)`), then the
+/// finishing passes of each level.
+pub fn link(
+    job: &Job,
+    regions: &Regions,
+    params: &Params,
+    levels: &[(f64, Vec<Pass>)],
+    finish: &[(f64, Vec<Pass>)],
+    sim_opts: &SimOptions,
+) -> Result<Toolpath> {
+    let first =
+        levels.iter().flat_map(|l| l.1.iter()).next().and_then(|p| p.pts.first().copied()).unwrap_or(DVec2::ZERO);
+    let mut l = Linker::new(job, regions, params, sim_opts, first)?;
+    let nl = levels.len();
+    for (i, (z, passes)) in levels.iter().enumerate() {
+        l.tp.note(format!("level {} of {}: z {:.3}", i + 1, nl, z));
+        l.down_at = l.down_at.filter(|_| false);
+        for p in order(passes, l.tp.end().truncate()) {
+            l.pass(p, *z);
+        }
+    }
+    l.finishing(finish);
+    Ok(l.finish())
+}
+
+/// Keeps the strategy's order, except that clean-up passes of one level are visited nearest
+/// first.
+pub(crate) fn order(passes: &[Pass], from: DVec2) -> Vec<Pass> {
+    let mut out = Vec::with_capacity(passes.len());
+    let mut cur = from;
+    let mut i = 0;
+    while i < passes.len() {
+        let mut j = i;
+        while j < passes.len() && passes[j].level == passes[i].level && passes[j].kind == passes[i].kind {
+            j += 1;
+        }
+        if passes[i].kind != PassKind::Cleanup {
+            out.extend(passes[i..j].iter().cloned());
+            cur = passes[j - 1].pts.last().copied().unwrap_or(cur);
+            i = j;
+            continue;
+        }
+        let mut group: Vec<&Pass> = passes[i..j].iter().collect();
+        while !group.is_empty() {
+            let (k, _) = group
+                .iter()
+                .enumerate()
+                .map(|(k, p)| {
+                    let d = if p.closed {
+                        p.pts.iter().map(|q| (*q - cur).length_squared()).fold(f64::INFINITY, f64::min)
+                    } else {
+                        (p.pts[0] - cur).length_squared()
+                    };
+                    (k, d)
+                })
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap_or((0, 0.0));
+            let p = group.remove(k);
+            cur = if p.closed { cur } else { *p.pts.last().unwrap_or(&cur) };
+            out.push(p.clone());
+        }
+        i = j;
+    }
+    out
+}
+
+pub(crate) struct Linker<'a> {
+    pub(crate) job: &'a Job,
+    pub(crate) params: &'a Params,
+    pub(crate) sim: RasterSim,
+    pub(crate) tp: Toolpath,
+    pub(crate) safe_z: f64,
+    pub(crate) r: f64,
+    pub(crate) feed: f64,
+    pub(crate) entry_feed: f64,
+    /// Helix and ramp feed.
+    pub(crate) ramp_feed: f64,
+    /// The level the tool is down at, if it is.
+    pub(crate) down_at: Option<f64>,
+    pub(crate) step: f64,
+    /// Moves pushed now were already cut into the model (adaptive passes).
+    pub(crate) precut: bool,
+    /// Extra radius for the clearance tests of links and lifted rapids, mm. The model cuts
+    /// cells by their centres, so a cell counted as cut can still hold material up to half a
+    /// cell from its centre; a strategy whose passes end anywhere in the material (adaptive)
+    /// tests three quarters of a cell further (a half-cut cell holds material up to 0.71 cell
+    /// from its centre).
+    pub(crate) clear_margin: f64,
+}
+
+impl<'a> Linker<'a> {
+    /// A linker with a fresh planning model, the tool at the safe height above `first`.
+    pub(crate) fn new(
+        job: &'a Job,
+        regions: &Regions,
+        params: &'a Params,
+        sim_opts: &SimOptions,
+        first: DVec2,
+    ) -> Result<Self> {
+        let mut sim = RasterSim::new(job, regions, sim_opts)?;
+        sim.track_exact = false;
+        let safe_z = job.top() + params.clearance;
+        let tp = Toolpath::new(job.tool.clone(), DVec3::new(first.x, first.y, safe_z), safe_z);
+        Ok(Linker {
+            job,
+            params,
+            sim,
+            tp,
+            safe_z,
+            r: job.radius(),
+            feed: job.feed,
+            entry_feed: job.feed * params.entry_feed_frac,
+            ramp_feed: job.feed * params.ramp_feed_frac,
+            down_at: None,
+            step: job.stepover_mm(),
+            precut: false,
+            clear_margin: 0.0,
+        })
+    }
+
+    /// Cuts the finishing contours of each level (`finish[i] = (z, passes)`), after the roughing.
+    pub(crate) fn finishing(&mut self, finish: &[(f64, Vec<Pass>)]) {
+        for (i, (z, passes)) in finish.iter().enumerate() {
+            self.tp.note(format!("finishing contour {} of {}: z {:.3}", i + 1, finish.len(), z));
+            self.down_at = None;
+            for p in order(passes, self.tp.end().truncate()) {
+                self.pass(p, *z);
+            }
+        }
+    }
+
+    /// Retracts and hands over the program.
+    pub(crate) fn finish(mut self) -> Toolpath {
+        // the linker starts above a guess of where the first pass begins; the program starts
+        // above where it really does (the travel at the safe height before the first move down
+        // is dropped: the post's opening rapid goes there directly)
+        let start_z = self.tp.start.z;
+        let k = self.tp.moves.iter().take_while(|m| m.is_rapid() && (m.to.z - start_z).abs() < 1e-9).count();
+        if k > 0 && k < self.tp.moves.len() {
+            self.tp.start = self.tp.moves[k - 1].to;
+            self.tp.moves.drain(..k);
+            for n in &mut self.tp.notes {
+                n.at = n.at.saturating_sub(k);
+            }
+        }
+        if std::env::var("SWARF_DEBUG").is_ok() {
+            let mut by: std::collections::BTreeMap<String, (f64, usize)> = Default::default();
+            let mut at = self.tp.start;
+            for m in &self.tp.moves {
+                let e = by.entry(format!("{:?}", m.kind)).or_default();
+                e.0 += (m.to - at).length();
+                e.1 += 1;
+                at = m.to;
+            }
+            eprintln!("moves by kind (chord length mm, count): {by:?}");
+        }
+        let end = self.tp.end();
+        self.tp.note("end: retract");
+        self.tp.rapid(DVec3::new(end.x, end.y, self.safe_z));
+        self.tp
+    }
+
+    pub(crate) fn push_line(&mut self, kind: MoveKind, to: DVec3, feed: f64) {
+        let from = self.tp.end();
+        if (to - from).length() < 1e-9 {
+            return;
+        }
+        if kind == MoveKind::Rapid {
+            self.tp.rapid(to);
+        } else {
+            self.tp.line(kind, to, feed);
+        }
+        if !self.precut
+            && let Some(m) = self.tp.moves.last().copied()
+        {
+            self.sim.cut(&Path::of(from, &m));
+        }
+    }
+
+    pub(crate) fn push_arc(&mut self, kind: MoveKind, to: DVec3, center: DVec2, ccw: bool, feed: f64) {
+        let from = self.tp.end();
+        if (to - from).length() < 1e-9 {
+            return;
+        }
+        self.tp.arc(kind, to, center, ccw, feed);
+        if !self.precut
+            && let Some(m) = self.tp.moves.last().copied()
+        {
+            self.sim.cut(&Path::of(from, &m));
+        }
+    }
+
+    /// Is the tool clear of the part along the XY segment at height z?
+    pub(crate) fn keep_safe(&self, a: DVec2, b: DVec2, z: f64) -> bool {
+        if z >= self.job.part_top + self.job.allowance_floor + 0.01 {
+            return true;
+        }
+        let p = Path::Line { a: a.extend(z), b: b.extend(z) };
+        self.sim.keep_distance(&p, self.r) >= self.r - 1e-6
+    }
+
+    /// When the way from `a` to `b` at `z` is clear of material except within one tool
+    /// diameter of `b` (arriving there is a lateral entry, not a cut through material): the
+    /// point `m` that far from `b`, and how far the way to it still touches what the tool
+    /// touches at `a` (see [`RasterSim::leaving_distance`]).
+    pub(crate) fn clear_until_near(&self, a: DVec2, b: DVec2, z: f64) -> Option<(DVec2, f64)> {
+        let len = (b - a).length();
+        let keep_out = 2.0 * self.r;
+        if len <= keep_out {
+            return None;
+        }
+        let m = a + (b - a) * ((len - keep_out) / len);
+        self.sim.leaving_distance(a.extend(z), m.extend(z), self.clear_margin).map(|t| (m, t))
+    }
+
+    /// Highest material within `rho` of the point (−∞ when none).
+    pub(crate) fn top_near(&self, p: DVec2, rho: f64) -> f64 {
+        let h = self.sim.max_height_near(&Path::Line { a: p.extend(0.0), b: p.extend(0.0) }, rho);
+        h as f64
+    }
+
+    /// The minimum retract for a rapid from `a` to `b` that cannot go at `z`: the approach
+    /// height above the highest material the tool passes near on the way (the model's top
+    /// within the radius plus the links' margin and half a millimetre), when that is below the
+    /// safe height and the way there is clear of the model and of the part. With fixtures on
+    /// the table the way must also keep off them in plan (a clamp may stand above the stock).
+    pub(crate) fn lowest_clear(&self, a: DVec2, b: DVec2, z: f64) -> Option<f64> {
+        let line = |h: f64| Path::Line { a: a.extend(h), b: b.extend(h) };
+        let top = self.sim.max_height_near(&line(z), self.r + 0.5 + self.clear_margin) as f64;
+        let zl = (top + self.params.approach).max(z);
+        // off the part (and, with fixtures, off the part and the fixtures in plan at any height)
+        let kept = || {
+            if self.job.fixtures.is_empty() {
+                self.keep_safe(a, b, zl)
+            } else {
+                self.sim.keep_distance(&line(zl), self.r) >= self.r - 1e-6
+            }
+        };
+        (zl < self.safe_z - 1e-9 && self.sim.is_clear(&line(zl), 0.5 + self.clear_margin) && kept()).then_some(zl)
+    }
+
+    /// What lifting over from the tool's place to `to` (down at `z`) and descending there costs,
+    /// as a length of rapid: the way across, up to the minimum retract and down to the approach
+    /// height by rapids, and the descent from there at the feed.
+    pub(crate) fn lift_cost(&self, to: DVec2, z: f64) -> f64 {
+        let a = self.tp.end().truncate();
+        let up = self.lowest_clear(a, to, z).unwrap_or(self.safe_z) - z;
+        let approach = self.params.approach.min(up);
+        (to - a).length() + 2.0 * up - approach + approach * self.job.rapid_rate / self.feed.max(1e-9)
+    }
+
+    /// Keeps the tool down at `z` on the way to `to` (where it can stand) round the material on
+    /// the straight way, through cleared space, when that costs less than lifting over (see
+    /// [`route`]): rapids at depth, the first fed while the tool leaves the material it touches.
+    /// False when there is no such way.
+    pub(crate) fn link_around(&mut self, to: DVec2, z: f64) -> bool {
+        let cur = self.tp.end();
+        let a = cur.truncate();
+        let h = (0.5 * self.r).max(4.0 * self.sim.grid.res);
+        let reach = self.r + self.clear_margin + 0.75 * h;
+        let budget = self.lift_cost(to, z);
+        let margin = self.clear_margin;
+        let way = route::route(
+            a,
+            to,
+            h,
+            budget,
+            20_000,
+            |p| self.sim.grid.cell_of(p).is_some() && self.top_near(p, reach) <= z + 0.01 && self.keep_safe(p, p, z),
+            |p| self.keep_safe(a, p, z) && self.sim.leaving_distance(cur, p.extend(z), margin).is_some(),
+            |p, q| self.keep_safe(p, q, z) && self.sim.is_clear(&Path::Line { a: p.extend(z), b: q.extend(z) }, margin),
+        );
+        let Some(way) = way else { return false };
+        for (k, w) in way.into_iter().enumerate() {
+            let t = if k == 0 { self.sim.leaving_distance(cur, w.extend(z), margin).unwrap_or(0.0) } else { 0.0 };
+            self.link_clear(w, z, t);
+        }
+        true
+    }
+
+    /// Brings the tool above `target` at height at least `h` (rapids only, through clear space):
+    /// at the height it is at when the way there is clear, else at the minimum retract (see
+    /// [`Self::lowest_clear`]), else at the safe height.
+    pub(crate) fn travel(&mut self, target: DVec2, h: f64) {
+        let cur = self.tp.end();
+        let h = h.min(self.safe_z);
+        if (cur.truncate() - target).length() < 1e-9 {
+            if cur.z < h {
+                self.push_line(MoveKind::Rapid, target.extend(h), 0.0);
+            }
+            return;
+        }
+        let z = cur.z.max(h);
+        if cur.z < z {
+            self.push_line(MoveKind::Rapid, cur.truncate().extend(z), 0.0);
+        }
+        let across = Path::Line { a: cur.truncate().extend(z), b: target.extend(z) };
+        let ok = z >= self.safe_z - 1e-9
+            || (self.sim.is_clear(&across, 0.5 + self.clear_margin) && self.keep_safe(cur.truncate(), target, z));
+        if ok {
+            self.push_line(MoveKind::Rapid, target.extend(z), 0.0);
+        } else if let Some(zl) = self.lowest_clear(cur.truncate(), target, z) {
+            self.push_line(MoveKind::Rapid, cur.truncate().extend(zl), 0.0);
+            self.push_line(MoveKind::Rapid, target.extend(zl), 0.0);
+        } else {
+            self.push_line(MoveKind::Rapid, cur.truncate().extend(self.safe_z), 0.0);
+            self.push_line(MoveKind::Rapid, target.extend(self.safe_z), 0.0);
+        }
+        let now = self.tp.end();
+        if now.z > h {
+            self.push_line(MoveKind::Rapid, target.extend(h), 0.0);
+        }
+    }
+
+    /// Moves the tool, down at `z`, to `to` along a straight way already found clear: a rapid at
+    /// depth (as FreeCAD's Adaptive links, `LiftDistance` 0), or with `feed_links` a feed move
+    /// at the cutting feed times the feed boost (§5: no engagement), lifted by a hair and
+    /// taken as a rapid when longer than two diameters.
+    /// `t`: how far along the way the tool still touches the material it touched at the start
+    /// (see [`RasterSim::leaving_distance`]): that part is fed, never a rapid.
+    pub(crate) fn link_clear(&mut self, to: DVec2, z: f64, t: f64) {
+        if !self.params.feed_links {
+            let a = self.tp.end().truncate();
+            let len = (to - a).length();
+            if t > 0.0 {
+                let m = if len > 1e-12 { a + (to - a) * (t / len) } else { to };
+                self.push_line(MoveKind::Link, m.extend(z), self.feed * self.params.feed_boost);
+            }
+            if t < len {
+                self.push_line(MoveKind::Rapid, to.extend(z), 0.0);
+            }
+        } else if (to - self.tp.end().truncate()).length() > 2.0 * self.job.tool.diameter {
+            let lift = (z + 0.5).min(self.safe_z);
+            let cur = self.tp.end();
+            self.push_line(MoveKind::Rapid, cur.truncate().extend(lift), 0.0);
+            self.push_line(MoveKind::Rapid, to.extend(lift), 0.0);
+            self.push_line(MoveKind::Descend, to.extend(z), self.feed);
+        } else {
+            self.push_line(MoveKind::Link, to.extend(z), self.feed * self.params.feed_boost);
+        }
+    }
+
+    pub(crate) fn pass(&mut self, pass: Pass, z: f64) {
+        if pass.pts.is_empty() {
+            return;
+        }
+        let mut pts = pass.pts.clone();
+        let cur = self.tp.end();
+        if !pass.closed && pass.reversible && pts.len() > 1 {
+            // start from the end where the tool can land, or else the nearer one
+            let landing = |p: DVec2| self.top_near(p, self.r + LANDING_MARGIN) <= z + 0.01;
+            let (a, b) = (pts[0], pts[pts.len() - 1]);
+            let reverse = if self.down_at == Some(z) {
+                (b - cur.truncate()).length() < (a - cur.truncate()).length()
+            } else {
+                match (landing(a), landing(b)) {
+                    (false, true) => true,
+                    (true, false) => false,
+                    _ => (b - cur.truncate()).length() < (a - cur.truncate()).length(),
+                }
+            };
+            if reverse {
+                pts.reverse();
+            }
+        }
+        if pass.closed {
+            let k = self.pick_start(&pts, z, cur);
+            pts.rotate_left(k);
+            pts.push(pts[0]);
+        }
+        let start = pts[0];
+        let eps = 0.01;
+        let mut arrived = false;
+        if self.down_at == Some(z) {
+            let len = (start - cur.truncate()).length();
+            if len < 1e-9 {
+                arrived = true;
+            } else if self.keep_safe(cur.truncate(), start, z) {
+                if let Some(t) = self.sim.leaving_distance(cur, start.extend(z), self.clear_margin) {
+                    self.link_clear(start, z, t);
+                    arrived = true;
+                } else if len <= (1.5 * self.step).max(0.5 * self.r) {
+                    // a short step: a lateral entry into the pass
+                    self.push_line(MoveKind::Cut, start.extend(z), self.feed);
+                    arrived = true;
+                } else if let Some((m, t)) = self.clear_until_near(cur.truncate(), start, z) {
+                    // a way through cleared space that only meets material on arriving: a link
+                    // to a tool diameter before it, then a lateral entry
+                    self.link_clear(m, z, t);
+                    self.push_line(MoveKind::Cut, start.extend(z), self.feed);
+                    arrived = true;
+                }
+            }
+        }
+        if !arrived {
+            self.enter(start, &pts, z, eps);
+        }
+        self.down_at = Some(z);
+        let kind = if pass.kind == PassKind::Finish { MoveKind::Finish } else { MoveKind::Cut };
+        self.emit(&pts, z, kind);
+    }
+
+    /// Chooses where to start a loop: where the tool can land without entering material if
+    /// anywhere, else where a helix fits best; when already down, the nearest point.
+    pub(crate) fn pick_start(&self, pts: &[DVec2], z: f64, cur: DVec3) -> usize {
+        let nearest = pts
+            .iter()
+            .enumerate()
+            .min_by(|a, b| {
+                (*a.1 - cur.truncate()).length_squared().total_cmp(&(*b.1 - cur.truncate()).length_squared())
+            })
+            .map_or(0, |(k, _)| k);
+        if self.down_at == Some(z) {
+            return nearest;
+        }
+        let n = pts.len();
+        let stride = (n / 48).max(1);
+        let mut best = (nearest, f64::NEG_INFINITY);
+        for k in (0..n).step_by(stride).chain(std::iter::once(nearest)) {
+            let p = pts[k];
+            let clear = self.top_near(p, self.r + LANDING_MARGIN) <= z + 0.01;
+            let kd = self.sim.keep_distance(&Path::Line { a: p.extend(z), b: p.extend(z) }, 10.0 * self.r);
+            let score = if clear { 1e9 - (p - cur.truncate()).length() } else { kd };
+            if score > best.1 {
+                best = (k, score);
+            }
+        }
+        best.0
+    }
+
+    /// Gets the tool down to `z` at `start`, entering material as gently as possible.
+    pub(crate) fn enter(&mut self, start: DVec2, pts: &[DVec2], z: f64, eps: f64) {
+        let r = self.r;
+        let approach = self.params.approach;
+        let top = self.top_near(start, r + LANDING_MARGIN);
+        if top <= z + eps {
+            // free or cleared space: rapid close, feed the last bit
+            let h = (z + approach).max(if top.is_finite() { top + approach } else { z + approach });
+            self.travel(start, h);
+            self.push_line(MoveKind::Descend, start.extend(z), self.feed);
+            return;
+        }
+        // a lateral entry: land in free or cleared space close by and come in sideways
+        // (paper 1 §4.5: entering tangent to the stock from free space before any plunge)
+        if let Some(p) = self.lateral_landing(start, z, 1.5 * r) {
+            self.land_and_approach(p, start, z);
+            return;
+        }
+        // helix around the start
+        let kd = self.sim.keep_distance(&Path::Line { a: start.extend(z), b: start.extend(z) }, 10.0 * r);
+        let room = kd - r - self.params.arc_tol - 0.005;
+        let rh = (self.params.helix_radius_frac * r).min(room);
+        if rh >= self.params.helix_min_frac * r {
+            let top_h = self.top_near(start, r + rh + 0.05).max(z);
+            self.helix(start, rh, top_h + approach, z, pts);
+            return;
+        }
+        // ramp along the start of the pass
+        let total = polyline_length(pts);
+        let want = (3.0 * self.job.tool.diameter).min(total);
+        if want >= (0.5 * self.job.tool.diameter).max(1.0) {
+            let prefix = prefix_of(pts, want);
+            let mut top_r = z;
+            for w in prefix.windows(2) {
+                top_r = top_r
+                    .max(self.sim.max_height_near(&Path::Line { a: w[0].extend(0.0), b: w[1].extend(0.0) }, r + 0.05)
+                        as f64);
+            }
+            self.ramp(&prefix, top_r + approach, z);
+            return;
+        }
+        // a longer way in sideways before a plunge
+        if let Some(p) = self.lateral_landing(start, z, 4.0 * r) {
+            self.land_and_approach(p, start, z);
+            return;
+        }
+        // nothing fits: plunge
+        self.travel(start, top + approach);
+        self.tp.note("plunge: no room for a helix or a ramp");
+        self.push_line(MoveKind::Plunge, start.extend(z), self.entry_feed);
+    }
+
+    /// The nearest point within `max` of `start` where the tool can land at `z` (no material
+    /// within its radius) and from which a straight move to `start` does not touch the part.
+    pub(crate) fn lateral_landing(&self, start: DVec2, z: f64, max: f64) -> Option<DVec2> {
+        let r = self.r;
+        let mut best: Option<(f64, DVec2)> = None;
+        for ring in 1..=8 {
+            let d = max * ring as f64 / 8.0;
+            for k in 0..24 {
+                let a = std::f64::consts::TAU * k as f64 / 24.0;
+                let p = start + d * DVec2::new(a.cos(), a.sin());
+                if self.top_near(p, r + LANDING_MARGIN) > z + 0.01 {
+                    continue;
+                }
+                if self.keep_safe(p, start, z) && best.is_none_or(|b| d < b.0) {
+                    best = Some((d, p));
+                }
+            }
+            if best.is_some() {
+                break;
+            }
+        }
+        best.map(|b| b.1)
+    }
+
+    /// Lands at `p` and cuts sideways to `start`.
+    pub(crate) fn land_and_approach(&mut self, p: DVec2, start: DVec2, z: f64) {
+        let approach = self.params.approach;
+        let top = self.top_near(p, self.r + LANDING_MARGIN);
+        let h = (z + approach).max(if top.is_finite() { top + approach } else { z + approach });
+        self.travel(p, h);
+        self.push_line(MoveKind::Descend, p.extend(z), self.feed);
+        self.tp.note("lateral entry");
+        self.push_line(MoveKind::Cut, start.extend(z), self.feed);
+    }
+
+    pub(crate) fn helix(&mut self, c: DVec2, rh: f64, z_from: f64, z: f64, pts: &[DVec2]) {
+        // start on the circle opposite the pass direction, so the last turn ends facing it
+        let dir = if pts.len() > 1 { (pts[1] - pts[0]).normalize_or_zero() } else { DVec2::X };
+        let a0 = if dir.length_squared() > 0.0 { dir.y.atan2(dir.x) + std::f64::consts::PI } else { 0.0 };
+        self.helix_down(c, rh, z_from, z, a0);
+        self.push_line(MoveKind::Cut, c.extend(z), self.feed);
+    }
+
+    /// A helix of radius `rh` around `c` from `z_from` down to `z`, starting at angle `a0`, then
+    /// one full turn at depth that cleans the bottom; returns the angle it ends at (on the
+    /// circle). Counter-clockwise for climb milling (the material outside the circle is then on
+    /// the tool's right).
+    pub(crate) fn helix_down(&mut self, c: DVec2, rh: f64, z_from: f64, z: f64, a0: f64) -> f64 {
+        let ccw = self.params.climb;
+        let on = |a: f64| c + rh * DVec2::new(a.cos(), a.sin());
+        self.travel(c, z_from);
+        self.tp.note(format!("helix entry r {:.3} at X{:.3} Y{:.3}", rh, c.x, c.y));
+        self.push_line(MoveKind::Rapid, on(a0).extend(z_from), 0.0);
+        let pitch = std::f64::consts::TAU * rh * self.params.ramp_angle_deg.to_radians().tan();
+        let total = std::f64::consts::TAU * ((z_from - z) / pitch.max(1e-6));
+        let n = (total / std::f64::consts::PI).ceil().max(1.0) as usize;
+        let s = if ccw { 1.0 } else { -1.0 };
+        for k in 1..=n {
+            let t = k as f64 / n as f64;
+            let a = a0 + s * total * t;
+            // exactly `z` at the bottom: a last bit of rounding would print the turn at depth
+            // as a rise of 1 µm and count it outside the bore
+            let zk = if k == n { z } else { z_from + (z - z_from) * t };
+            self.push_arc(MoveKind::Entry, on(a).extend(zk), c, ccw, self.ramp_feed);
+        }
+        let a_end = a0 + s * total;
+        self.push_arc(MoveKind::Cut, on(a_end + s * std::f64::consts::PI).extend(z), c, ccw, self.feed);
+        self.push_arc(MoveKind::Cut, on(a_end).extend(z), c, ccw, self.feed);
+        a_end
+    }
+
+    pub(crate) fn ramp(&mut self, prefix: &[DVec2], z_from: f64, z: f64) {
+        let len = polyline_length(prefix);
+        let drop_per_len = self.params.ramp_angle_deg.to_radians().tan();
+        self.travel(prefix[0], z_from);
+        self.tp.note(format!("ramp entry along {:.3} mm", len));
+        let mut zc = z_from;
+        let mut forward = true;
+        let mut guard = 0;
+        while zc > z + 1e-9 && guard < 10_000 {
+            guard += 1;
+            let seq: Vec<DVec2> = if forward { prefix.to_vec() } else { prefix.iter().rev().copied().collect() };
+            let mut prev = seq[0];
+            for q in &seq[1..] {
+                let d = (*q - prev).length();
+                zc = (zc - d * drop_per_len).max(z);
+                self.push_line(MoveKind::Entry, q.extend(zc), self.ramp_feed);
+                prev = *q;
+            }
+            forward = !forward;
+        }
+        // clean the wedge at full depth and come back to the start
+        if !forward {
+            // ended at the far end: back to the start
+            for q in prefix.iter().rev().skip(1) {
+                self.push_line(MoveKind::Cut, q.extend(z), self.feed);
+            }
+        } else {
+            for q in prefix.iter().skip(1) {
+                self.push_line(MoveKind::Cut, q.extend(z), self.feed);
+            }
+            for q in prefix.iter().rev().skip(1) {
+                self.push_line(MoveKind::Cut, q.extend(z), self.feed);
+            }
+        }
+    }
+
+    /// Appends a pass at `z`: stretches where the tool would only cut air become rapids lifted
+    /// clear of the floor (when long enough to be worth it and the straight way is clear); the
+    /// rest is arc-fitted into lines and arcs.
+    pub(crate) fn emit(&mut self, pts: &[DVec2], z: f64, kind: MoveKind) {
+        let cur = self.tp.end().truncate();
+        let mut poly = Vec::with_capacity(pts.len() + 1);
+        poly.push(cur);
+        if (pts[0] - cur).length() > 1e-9 {
+            poly.push(pts[0]);
+        }
+        poly.extend_from_slice(&pts[1..]);
+        // split into pieces at most R long and classify them
+        let piece = self.r.max(0.5);
+        let mut fine: Vec<(DVec2, bool)> = vec![(poly[0], false)];
+        for w in poly.windows(2) {
+            let n = ((w[1] - w[0]).length() / piece).ceil().max(1.0) as usize;
+            let mut prev = w[0];
+            for k in 1..=n {
+                let q = w[0] + (w[1] - w[0]) * (k as f64 / n as f64);
+                let clear = self.sim.is_clear(&Path::Line { a: prev.extend(z), b: q.extend(z) }, -0.005);
+                fine.push((q, clear));
+                prev = q;
+            }
+        }
+        // runs of equal classification; a point belongs to the run of the segment ending at it
+        let min_air = 2.0 * self.job.tool.diameter;
+        let mut i = 0;
+        while i + 1 < fine.len() {
+            let air = fine[i + 1].1;
+            let mut j = i + 1;
+            while j + 1 < fine.len() && fine[j + 1].1 == air {
+                j += 1;
+            }
+            let run: Vec<DVec2> = fine[i..=j].iter().map(|p| p.0).collect();
+            if air && polyline_length(&run) >= min_air && self.lift_across(run[0], run[run.len() - 1], z) {
+                // done by lift_across
+            } else {
+                self.fit_emit(&run, z, if air { MoveKind::Link } else { kind });
+            }
+            i = j;
+        }
+    }
+
+    /// Rapid from `a` to `b` lifted by half a millimetre, when the straight way is clear.
+    pub(crate) fn lift_across(&mut self, a: DVec2, b: DVec2, z: f64) -> bool {
+        let lift = (z + 0.5).min(self.safe_z);
+        let across = Path::Line { a: a.extend(lift), b: b.extend(lift) };
+        if !(self.sim.is_clear(&across, self.clear_margin) && self.keep_safe(a, b, lift)) {
+            return false;
+        }
+        self.push_line(MoveKind::Rapid, a.extend(lift), 0.0);
+        self.push_line(MoveKind::Rapid, b.extend(lift), 0.0);
+        self.push_line(MoveKind::Rapid, b.extend(z), 0.0);
+        true
+    }
+
+    /// Arc-fits the polyline (which starts where the tool is) and appends it at `z`.
+    pub(crate) fn fit_emit(&mut self, poly: &[DVec2], z: f64, kind: MoveKind) {
+        self.fit_emit_feed(poly, z, kind, self.feed);
+    }
+
+    /// [`Self::fit_emit`] at the given feed.
+    pub(crate) fn fit_emit_feed(&mut self, poly: &[DVec2], z: f64, kind: MoveKind, feed: f64) {
+        for piece in arcfit::fit(poly, self.params.arc_tol) {
+            match piece {
+                Piece::Line { to } => self.push_line(kind, to.extend(z), feed),
+                Piece::Arc { to, center, ccw } => {
+                    // split arcs over a half turn so that every move is unambiguous
+                    let from = self.tp.end().truncate();
+                    let g = crate::toolpath::ArcGeom::new(from.extend(z), to.extend(z), center, ccw);
+                    if g.sweep.abs() > std::f64::consts::PI {
+                        let mid = g.at(0.5).truncate();
+                        self.push_arc(kind, mid.extend(z), center, ccw, feed);
+                    }
+                    self.push_arc(kind, to.extend(z), center, ccw, feed);
+                }
+            }
+        }
+    }
+}
+
+/// The first `len` mm of a polyline.
+fn prefix_of(pts: &[DVec2], len: f64) -> Vec<DVec2> {
+    let mut out = vec![pts[0]];
+    let mut acc = 0.0;
+    for w in pts.windows(2) {
+        let d = (w[1] - w[0]).length();
+        if acc + d >= len {
+            let t = if d > 0.0 { (len - acc) / d } else { 0.0 };
+            out.push(w[0] + (w[1] - w[0]) * t);
+            return out;
+        }
+        acc += d;
+        out.push(w[1]);
+    }
+    out
+}

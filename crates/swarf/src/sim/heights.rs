@@ -1,0 +1,243 @@
+//! Heights from meshes for the simulators of 3D jobs: the part's height map over a grid, which
+//! a model built with [`super::HeightMap`] reads to find gouges anywhere on the part's surface;
+//! the material model of a whole mesh job, and the rest material it leaves (the grey closing of
+//! the part's heights by the tool's disk).
+
+use super::grid::Grid;
+use super::raster::RasterSim;
+use super::replay::Rest;
+use super::{HeightMap, SimOptions};
+use crate::error::Result;
+use crate::geom::mesh::Mesh;
+use crate::model::MeshJob;
+use rayon::prelude::*;
+use std::sync::Arc;
+
+/// The highest facet over each cell centre of `grid` (−∞ where there is none), row-major.
+pub fn height_map(mesh: &Mesh, grid: &Grid) -> Vec<f32> {
+    let mut h = vec![f32::NEG_INFINITY; grid.len()];
+    // rows in parallel: each row scans the facets whose y-range covers it
+    let mut by_row: Vec<Vec<usize>> = vec![Vec::new(); grid.ny];
+    for (ti, t) in mesh.tris.iter().enumerate() {
+        let ylo = t[0].y.min(t[1].y).min(t[2].y);
+        let yhi = t[0].y.max(t[1].y).max(t[2].y);
+        let j0 = ((ylo - grid.y0) / grid.res - 0.5).ceil().max(0.0) as usize;
+        let j1 = ((yhi - grid.y0) / grid.res - 0.5).floor();
+        if j1 < 0.0 {
+            continue;
+        }
+        for row in by_row.iter_mut().take((j1 as usize + 1).min(grid.ny)).skip(j0) {
+            row.push(ti);
+        }
+    }
+    h.par_chunks_mut(grid.nx).zip(by_row.par_iter()).enumerate().for_each(|(j, (row, tris))| {
+        let y = grid.y0 + (j as f64 + 0.5) * grid.res;
+        for &ti in tris {
+            let t = &mesh.tris[ti];
+            // the facet's span on this row: intersect the line y with its edges
+            let mut xs = [0.0f64; 3];
+            let mut zs = [0.0f64; 3];
+            let mut n = 0;
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                if (a.y <= y) != (b.y <= y) {
+                    let u = (y - a.y) / (b.y - a.y);
+                    xs[n] = a.x + (b.x - a.x) * u;
+                    zs[n] = a.z + (b.z - a.z) * u;
+                    n += 1;
+                    if n == 2 {
+                        break;
+                    }
+                }
+            }
+            if n < 2 {
+                continue;
+            }
+            let (xa, za, xb, zb) =
+                if xs[0] <= xs[1] { (xs[0], zs[0], xs[1], zs[1]) } else { (xs[1], zs[1], xs[0], zs[0]) };
+            let i0 = ((xa - grid.x0) / grid.res - 0.5).ceil().max(0.0) as usize;
+            let i1 = ((xb - grid.x0) / grid.res - 0.5).floor();
+            if i1 < 0.0 {
+                continue;
+            }
+            for (i, cell) in row.iter_mut().enumerate().take((i1 as usize + 1).min(grid.nx)).skip(i0) {
+                let x = grid.x0 + (i as f64 + 0.5) * grid.res;
+                let z = if xb - xa > 1e-12 { za + (zb - za) * (x - xa) / (xb - xa) } else { za.max(zb) };
+                *cell = cell.max(z as f32);
+            }
+        }
+    });
+    h
+}
+
+/// The material model of a whole mesh job: the stock box, with the part's surface from the
+/// mesh (raised by the floor allowance) as what must stay.
+pub(crate) fn mesh_model(job: &MeshJob, sim: &SimOptions) -> Result<RasterSim> {
+    let mj = job.model_job();
+    let regions = mj.regions(job.radius(), 0.0)?;
+    let grid = RasterSim::grid_for(&mj, &regions.keep, sim)?;
+    let mut part = height_map(&job.mesh, &grid);
+    let lift = job.allowance_floor as f32;
+    for h in &mut part {
+        *h += lift;
+    }
+    let stock = vec![f32::INFINITY; grid.len()];
+    let opts = SimOptions { heights: Some(Arc::new(HeightMap { grid, stock, part: Some(part) })), ..sim.clone() };
+    RasterSim::new(&mj, &regions, &opts)
+}
+
+/// Material the tool could have removed and left: at each cell, the stock above the lowest
+/// height a flat end mill of the job's radius reaches there without touching the part (the grey
+/// closing of the part's heights by the tool's disk), counted where it is thicker than the
+/// simulation's tolerance.
+pub(crate) fn mesh_rest(job: &MeshJob, sim: &RasterSim) -> Rest {
+    let g = sim.grid;
+    let part = sim.part_heights();
+    let floor = (job.floor + job.allowance_floor) as f32;
+    let p: Vec<f32> = part.iter().map(|&h| h.max(floor)).collect();
+    // the sideways allowance: the part's heights spread over a disk of its radius (a cylinder
+    // round each point, which holds the ball of the allowance)
+    let p = if job.allowance > 0.0 { disk_filter(&p, g.nx, g.ny, job.allowance / g.res, true) } else { p };
+    // (the tool's axis kept R + res/√2 from the part's cell centres, as a path running exactly
+    // at R from the true surface may be that far from the nearest centre: no phantom slivers
+    // along walls; slivers thinner than that go unreported)
+    let rc = job.radius() / g.res + std::f64::consts::FRAC_1_SQRT_2;
+    // tool tip height at each centre: the highest part under the disk (dilation), then the
+    // lowest of those over the disks that cover a cell (erosion)
+    let tip = disk_filter(&p, g.nx, g.ny, rc, true);
+    let reach = disk_filter(&tip, g.nx, g.ny, job.radius() / g.res, false);
+    let s = sim.heights();
+    let (slo, shi) = (job.stock_lo, job.stock_hi);
+    let cell = g.res * g.res;
+    let mut r = Rest::default();
+    let tol = 0.01f32;
+    for j in 0..g.ny {
+        for i in 0..g.nx {
+            let c = g.center(i, j);
+            if c.x < slo.x || c.x > shi.x || c.y < slo.y || c.y > shi.y {
+                continue;
+            }
+            let k = j * g.nx + i;
+            let low = reach[k].max(p[k]);
+            if low >= shi.z as f32 - tol {
+                continue;
+            }
+            r.reachable_mm2 += cell;
+            let t = s[k] - low;
+            if t > tol {
+                if std::env::var("SWARF_DEBUG").is_ok() && t > 0.5 {
+                    eprintln!("rest {t:.3} mm at {c:?} (stock {:.3}, reach {:.3}, part {:.3})", s[k], reach[k], p[k]);
+                }
+                r.area_mm2 += cell;
+                r.volume_mm3 += t as f64 * cell;
+                r.max_thickness_mm = r.max_thickness_mm.max(t as f64);
+            }
+        }
+    }
+    r
+}
+
+/// Maximum (`max`) or minimum over the disk of radius `rc` cells around every cell: for each
+/// row offset, a running extreme over the row's chord (van Herk / Gil–Werman, O(1) a cell per
+/// offset). Outside the grid counts as −∞ for the maximum and +∞ for the minimum.
+fn disk_filter(h: &[f32], nx: usize, ny: usize, rc: f64, max: bool) -> Vec<f32> {
+    use rayon::prelude::*;
+    let ri = rc.floor() as i64;
+    let ext = if max { f32::NEG_INFINITY } else { f32::INFINITY };
+    let pick = |a: f32, b: f32| if max { a.max(b) } else { a.min(b) };
+    // per distinct half-width w, the running extreme of each row over [i − w, i + w]
+    let widths: Vec<usize> =
+        (-ri..=ri).map(|dy| ((rc * rc - (dy * dy) as f64).max(0.0)).sqrt().floor() as usize).collect();
+    let mut distinct = widths.clone();
+    distinct.sort_unstable();
+    distinct.dedup();
+    let rows: Vec<Vec<Vec<f32>>> = (0..ny)
+        .into_par_iter()
+        .map(|j| {
+            let row = &h[j * nx..(j + 1) * nx];
+            distinct.iter().map(|&w| window(row, w, ext, &pick)).collect()
+        })
+        .collect();
+    let mut out = vec![ext; nx * ny];
+    out.par_chunks_mut(nx).enumerate().for_each(|(j, o)| {
+        for (t, dy) in (-ri..=ri).enumerate() {
+            let jj = j as i64 + dy;
+            if jj < 0 || jj >= ny as i64 {
+                continue;
+            }
+            let wi = distinct.binary_search(&widths[t]).unwrap_or(0);
+            let src = &rows[jj as usize][wi];
+            for (a, b) in o.iter_mut().zip(src) {
+                *a = pick(*a, *b);
+            }
+        }
+    });
+    out
+}
+
+/// The extreme of `row` over `[i − w, i + w]` at every `i` (van Herk / Gil–Werman).
+fn window(row: &[f32], w: usize, ext: f32, pick: &dyn Fn(f32, f32) -> f32) -> Vec<f32> {
+    let n = row.len();
+    let k = 2 * w + 1;
+    // padded row: w cells of `ext` on each side
+    let m = n + 2 * w;
+    let at = |i: usize| if i < w || i >= w + n { ext } else { row[i - w] };
+    let mut pre = vec![ext; m];
+    let mut suf = vec![ext; m];
+    for i in 0..m {
+        pre[i] = if i % k == 0 { at(i) } else { pick(pre[i - 1], at(i)) };
+    }
+    for i in (0..m).rev() {
+        suf[i] = if i % k == k - 1 || i == m - 1 { at(i) } else { pick(suf[i + 1], at(i)) };
+    }
+    (0..n).map(|i| pick(suf[i], pre[i + 2 * w])).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::DVec2;
+    use crate::geom::mesh::tests::pocket_block;
+
+    #[test]
+    fn height_map_reads_the_top_surface() {
+        let m = pocket_block(10.0, 4.0);
+        let g = Grid { x0: -1.0, y0: -1.0, res: 0.5, nx: 24, ny: 24 };
+        let h = height_map(&m, &g);
+        let at = |x: f64, y: f64| {
+            let (i, j) = g.cell_of(DVec2::new(x, y)).unwrap();
+            h[j * g.nx + i]
+        };
+        assert_eq!(at(1.1, 1.1), 10.0);
+        assert_eq!(at(5.1, 5.1), 4.0);
+        assert_eq!(at(-0.6, 5.1), f32::NEG_INFINITY);
+    }
+
+    #[test]
+    fn window_matches_brute_force() {
+        let row: Vec<f32> = (0..37).map(|i| ((i * 7919) % 23) as f32).collect();
+        for w in [0usize, 1, 3, 8, 40] {
+            let got = window(&row, w, f32::NEG_INFINITY, &|a: f32, b: f32| a.max(b));
+            for (i, g) in got.iter().enumerate() {
+                let lo = i.saturating_sub(w);
+                let hi = (i + w).min(row.len() - 1);
+                let want = row[lo..=hi].iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                assert_eq!(*g, want, "w {w} i {i}");
+            }
+        }
+    }
+
+    #[test]
+    fn disk_filter_is_a_disk() {
+        let (nx, ny) = (21, 21);
+        let mut h = vec![0f32; nx * ny];
+        h[10 * nx + 10] = 1.0;
+        let d = disk_filter(&h, nx, ny, 4.5, true);
+        for j in 0..ny {
+            for i in 0..nx {
+                let r2 = (i as f64 - 10.0).powi(2) + (j as f64 - 10.0).powi(2);
+                assert_eq!(d[j * nx + i], if r2 <= 4.5 * 4.5 { 1.0 } else { 0.0 }, "{i} {j}");
+            }
+        }
+    }
+}

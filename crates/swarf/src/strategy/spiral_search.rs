@@ -1,0 +1,322 @@
+//! The spiral's search (paper 4 §4, Figs. 8–9): candidate dampings and start points, each
+//! planned, the fastest simulated first, the first that clears the pocket within the
+//! engagement bound kept; and the baseline of the docs' table, the best constant ζ.
+
+use super::spiral::{ENGAGEMENT_FLOOR, SpiralChoice, Trial, TrialSim, candidates, link_spiral};
+use crate::error::{Error, Result};
+use crate::model::{Job, Regions};
+use crate::plan::{LayerGeom, Params, Pass, wall_margin};
+use crate::post;
+use crate::report::{self, Report};
+use crate::sim::SimOptions;
+use crate::toolpath::Toolpath;
+
+/// The spiral program of a level job: the choice of [`optimise_spiral`] unless the parameters
+/// pin ζ or the floor; when no candidate was feasible, the program says so in a note at its start.
+#[allow(clippy::too_many_arguments)]
+pub fn plan_spiral(
+    job: &Job,
+    regions: &Regions,
+    geom: &LayerGeom,
+    params: &Params,
+    zs: &[f64],
+    finish: &[(f64, Vec<Pass>)],
+    sim: &SimOptions,
+) -> Result<Toolpath> {
+    let debug = std::env::var("SWARF_DEBUG").is_ok();
+    let mut missed = None;
+    let (choice, planned) = match (params.spiral_zeta, params.spiral_floor) {
+        (None, None) => {
+            let (best, trials, planned) = optimise_spiral_planned(job, regions, geom, params, sim, zs)?;
+            if debug {
+                for t in &trials {
+                    eprintln!("spiral trial {t:?}");
+                }
+            }
+            if let Some(t) = trials.iter().find(|t| t.choice == best)
+                && let Some(sim) = t.sim.filter(|s| !s.feasible)
+            {
+                missed = Some(format!(
+                    "no spiral candidate was clean within the engagement bound in simulation; \
+                     the nearest is kept: floor {:.2}, {} gouges, rest {:.2} %, p99 {:.0} deg \
+                     against a bound of {:.0}",
+                    best.floor,
+                    sim.gouges,
+                    100.0 * sim.rest,
+                    sim.p99_deg,
+                    spiral_bound(job)
+                ));
+            }
+            (best, planned)
+        }
+        (zeta, floor) => {
+            (SpiralChoice { zeta, start: params.spiral_start, floor: floor.unwrap_or(ENGAGEMENT_FLOOR) }, None)
+        }
+    };
+    // the optimiser's program of the choice is the one wanted, unless finishing passes
+    // follow it
+    let mut tp = match planned {
+        Some(tp) if finish.is_empty() => tp,
+        _ => link_spiral(job, regions, geom, params, zs, finish, sim, &choice)?,
+    };
+    if let Some(text) = missed {
+        tp.notes.insert(0, crate::toolpath::Note { at: 0, text });
+    }
+    Ok(tp)
+}
+
+/// The loop of paper 4 §4 (Figs. 8–9): chooses ζ (per level, through the floor of the gaps
+/// where turns are tight) and, with `params.spiral_optimise`, the start point of a spiral
+/// to minimise machining time subject to full clearing (rest ≤ 0.5 % of the reachable area, no
+/// gouge) and the engagement bound (p99 outside the entry ≤ the reference + 10°), as swarf's
+/// simulator (`sim`) judges them.
+///
+/// Every candidate of [`candidates`] is planned (quick), and its time is read off
+/// its program. Simulation (the slow part) is spent only where it can change the answer: the
+/// candidates are simulated in order of time, fastest first, and the first feasible one is the
+/// optimum. A damping (floor) that broke the engagement bound from one start is not simulated
+/// from the others: the engagement depends on the damping far more than on the start. At most
+/// [`MAX_SIMULATED`] are simulated; when none of those is feasible, the one that misses by
+/// least is returned (fewest gouges, then least rest beyond the limit, then least engagement
+/// beyond the bound), and [`plan`] says so in the program. Returns the choice and every
+/// trial.
+pub fn optimise_spiral(
+    job: &Job,
+    regions: &Regions,
+    geom: &LayerGeom,
+    params: &Params,
+    sim: &SimOptions,
+    zs: &[f64],
+) -> Result<(SpiralChoice, Vec<Trial>)> {
+    optimise_spiral_planned(job, regions, geom, params, sim, zs).map(|(choice, trials, _)| (choice, trials))
+}
+
+/// [`optimise_spiral`], with the program of the choice as planned (without finishing passes).
+fn optimise_spiral_planned(
+    job: &Job,
+    regions: &Regions,
+    geom: &LayerGeom,
+    params: &Params,
+    sim: &SimOptions,
+    zs: &[f64],
+) -> Result<(SpiralChoice, Vec<Trial>, Option<Toolpath>)> {
+    use Trial;
+    use rayon::prelude::*;
+    let bound = spiral_bound(job);
+    let p = params;
+    let candidates = candidates(regions, geom, p.spiral_start, p.spiral_optimise)?;
+    let mut planned: Vec<Option<(Toolpath, Toolpath)>> =
+        candidates.par_iter().map(|c| plan_spiral_trial(job, regions, geom, params, sim, zs, c)).collect();
+    let mut trials: Vec<Trial> = candidates
+        .iter()
+        .zip(&planned)
+        .map(|(c, tp)| Trial {
+            choice: *c,
+            time_min: tp.as_ref().map(|(_, written)| written.totals(job.rapid_rate).time_min),
+            sim: None,
+        })
+        .collect();
+    let mut order: Vec<usize> = (0..trials.len()).filter(|&i| trials[i].time_min.is_some()).collect();
+    // (stable: equal times keep the candidates' order, so the result is deterministic)
+    order.sort_by(|&a, &b| trials[a].time_min.unwrap_or(f64::MAX).total_cmp(&trials[b].time_min.unwrap_or(f64::MAX)));
+    let mut best = None;
+    let mut simulated = 0;
+    for &i in &order {
+        if simulated == MAX_SIMULATED {
+            break;
+        }
+        let same_damping =
+            |t: &Trial| t.choice.zeta == trials[i].choice.zeta && t.choice.floor == trials[i].choice.floor;
+        if trials.iter().any(|t| same_damping(t) && t.sim.is_some_and(|s| s.p99_deg > bound)) {
+            continue;
+        }
+        let Some((_, tp)) = &planned[i] else { continue };
+        simulated += 1;
+        let sim = judge_spiral(job, regions, sim, tp)?;
+        trials[i].sim = Some(sim);
+        if sim.feasible {
+            best = Some(i);
+            break;
+        }
+    }
+    let best = best
+        .or_else(|| nearest_miss(&trials, bound))
+        .ok_or_else(|| Error::param("--strategy spiral", "no spiral could be made from any start or ζ"))?;
+    Ok((trials[best].choice, trials, planned.swap_remove(best).map(|(tp, _)| tp)))
+}
+
+/// Of the simulated trials, the one that missed by least: fewest gouges, then least rest
+/// beyond [`REST_LIMIT`], then least p99 engagement beyond `bound` (rest within the limit is
+/// not traded against engagement). The first of equals.
+fn nearest_miss(trials: &[Trial], bound: f64) -> Option<usize> {
+    let miss =
+        |i: usize| trials[i].sim.map(|s| (s.gouges, (s.rest - REST_LIMIT).max(0.0), (s.p99_deg - bound).max(0.0)));
+    (0..trials.len())
+        .filter_map(|i| miss(i).map(|m| (i, m)))
+        .min_by(|(_, (ga, ra, ea)), (_, (gb, rb, eb))| ga.cmp(gb).then(ra.total_cmp(rb)).then(ea.total_cmp(eb)))
+        .map(|(i, _)| i)
+}
+
+/// [`optimise_spiral`] on a whole job (its regions, layer geometry and levels as [`plan`]
+/// makes them).
+pub fn optimise_spiral_job(job: &Job, params: &Params, sim: &SimOptions) -> Result<(SpiralChoice, Vec<Trial>)> {
+    let regions = job.regions(job.radius(), wall_margin(params))?;
+    let geom = LayerGeom::new(job, &regions, params)?;
+    optimise_spiral(job, &regions, &geom, params, sim, &job.levels())
+}
+
+/// The most candidates [`optimise_spiral`] simulates.
+pub const MAX_SIMULATED: usize = 8;
+
+/// The most rest [`optimise_spiral`] accepts, as a share of the reachable area.
+pub const REST_LIMIT: f64 = 0.005;
+
+/// The most p99 engagement outside the entry [`optimise_spiral`] accepts: the job's reference
+/// + 10°.
+fn spiral_bound(job: &Job) -> f64 {
+    job.width.engagement_deg() + 10.0
+}
+
+/// The program of one spiral candidate as planned and as it will be written (quantised), or
+/// `None` where the spiral cannot be made.
+fn plan_spiral_trial(
+    job: &Job,
+    regions: &Regions,
+    geom: &LayerGeom,
+    params: &Params,
+    sim: &SimOptions,
+    zs: &[f64],
+    choice: &SpiralChoice,
+) -> Option<(Toolpath, Toolpath)> {
+    let tp = link_spiral(job, regions, geom, params, zs, &[], sim, choice).ok()?;
+    let mut written = tp.clone();
+    written.quantize(post::COORD_STEP, post::CENTER_STEP);
+    Some((tp, written))
+}
+
+/// Simulates a spiral candidate and judges it by the optimiser's criteria.
+fn judge_spiral(job: &Job, regions: &Regions, sim: &SimOptions, tp: &Toolpath) -> Result<TrialSim> {
+    let (rp, rest) = crate::sim::simulate(job, regions, sim, tp, &mut |_| {})?;
+    let mut rep = Report::default();
+    report::fill(&mut rep, tp, &rp, &rest, job.rapid_rate);
+    let bound = spiral_bound(job);
+    Ok(TrialSim {
+        gouges: rep.gouges,
+        rest: rep.rest_fraction,
+        p99_deg: rep.engagement_deg.p99,
+        feasible: rep.rest_fraction <= REST_LIMIT && rep.gouges == 0 && rep.engagement_deg.p99 <= bound,
+    })
+}
+
+/// What [`spiral_study`] measured of one job.
+#[derive(Debug, Clone)]
+pub struct SpiralStudy {
+    /// The default of `rough`: the floor chosen from the maximum of f ([`optimise_spiral`]
+    /// without other starts), and its trials.
+    pub default: (SpiralChoice, Vec<Trial>),
+    /// `--optimise`: the floor and the start chosen, and the trials.
+    pub optimised: (SpiralChoice, Vec<Trial>),
+    /// The baseline: the largest feasible constant ζ ([`best_fixed_zeta`]).
+    pub fixed: Option<(f64, Trial)>,
+}
+
+/// The comparison of the docs' table: the default spiral, the optimiser's choice with other
+/// starts, and the best constant ζ, each simulated and judged by the optimiser's criteria.
+/// Slow (minutes).
+pub fn spiral_study(job: &Job, params: &Params, sim: &SimOptions) -> Result<SpiralStudy> {
+    let regions = job.regions(job.radius(), wall_margin(params))?;
+    let geom = LayerGeom::new(job, &regions, params)?;
+    let zs = job.levels();
+    let mut o = params.clone();
+    o.spiral_optimise = false;
+    let default = optimise_spiral(job, &regions, &geom, &o, sim, &zs)?;
+    o.spiral_optimise = true;
+    let optimised = optimise_spiral(job, &regions, &geom, &o, sim, &zs)?;
+    let fixed = best_fixed_zeta(job, &regions, &geom, params, sim, &zs)?;
+    Ok(SpiralStudy { default, optimised, fixed })
+}
+
+/// The baseline of the optimiser: the largest constant ζ whose spiral (from the maximum of f)
+/// is feasible by the optimiser's criteria, found by simulation (doubling or halving from
+/// ζ = 0.02 to a bracket, then five geometric bisections; feasibility is taken as monotone in
+/// ζ, which a wider spiral breaks by leaving more rest or engaging more). Returns ζ and its
+/// trial, or `None` when no ζ down to 1e-4 is feasible. Slow (each try is simulated, and a
+/// small ζ makes a long program): for comparisons, not for planning.
+pub fn best_fixed_zeta(
+    job: &Job,
+    regions: &Regions,
+    geom: &LayerGeom,
+    params: &Params,
+    sim: &SimOptions,
+    zs: &[f64],
+) -> Result<Option<(f64, Trial)>> {
+    let try_z = |z: f64| -> Result<Trial> {
+        let choice = SpiralChoice { zeta: Some(z), ..Default::default() };
+        let tp = plan_spiral_trial(job, regions, geom, params, sim, zs, &choice).map(|(_, written)| written);
+        let sim = match &tp {
+            Some(tp) => Some(judge_spiral(job, regions, sim, tp)?),
+            None => None,
+        };
+        Ok(Trial { choice, time_min: tp.map(|tp| tp.totals(job.rapid_rate).time_min), sim })
+    };
+    let (mut lo, mut hi): (Option<(f64, Trial)>, Option<f64>) = (None, None);
+    let mut z = 0.02;
+    while lo.is_none() || hi.is_none() {
+        let t = try_z(z)?;
+        if t.feasible() {
+            lo = Some((z, t));
+            if z >= 0.5 {
+                return Ok(lo);
+            }
+            z *= 2.0;
+        } else {
+            hi = Some(z);
+            if z < 1e-4 {
+                return Ok(None);
+            }
+            z *= 0.5;
+        }
+    }
+    for _ in 0..5 {
+        let (Some((l, _)), Some(h)) = (&lo, hi) else { break };
+        let m = (l * h).sqrt();
+        let t = try_z(m)?;
+        if t.feasible() { lo = Some((m, t)) } else { hi = Some(m) }
+    }
+    Ok(lo)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn trial(floor: f64, sim: Option<(usize, f64, f64)>) -> Trial {
+        Trial {
+            choice: SpiralChoice { zeta: None, start: None, floor },
+            time_min: Some(1.0),
+            sim: sim.map(|(gouges, rest, p99_deg)| TrialSim { gouges, rest, p99_deg, feasible: false }),
+        }
+    }
+
+    #[test]
+    fn the_nearest_miss_is_clean_first_then_within_the_bound() {
+        // rests under the limit are equal: the least engagement wins, not the least rest
+        let t = [
+            trial(0.5, Some((0, 0.0020, 90.0))),
+            trial(0.42, None),
+            trial(0.35, Some((0, 0.0031, 75.0))),
+            trial(0.28, Some((0, 0.0019, 80.0))),
+        ];
+        assert_eq!(nearest_miss(&t, 70.0), Some(2));
+        // rest beyond the limit counts before engagement, gouges before both
+        let t = [
+            trial(0.5, Some((0, 0.0060, 60.0))),
+            trial(0.35, Some((0, 0.0040, 99.0))),
+            trial(0.22, Some((1, 0.0, 60.0))),
+        ];
+        assert_eq!(nearest_miss(&t, 70.0), Some(1));
+        let t = [trial(0.5, Some((2, 0.0, 60.0))), trial(0.35, Some((1, 0.02, 99.0)))];
+        assert_eq!(nearest_miss(&t, 70.0), Some(1));
+        assert_eq!(nearest_miss(&[trial(0.5, None)], 70.0), None);
+    }
+}
