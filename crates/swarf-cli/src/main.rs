@@ -1,22 +1,36 @@
 //! The `swarf` command: a thin layer over the `swarf` library.
 
+//!
+//! Every option maps onto a field of the library's options structs; what an option left out
+//! means is the library's default (`LinkOptions::DEFAULT`, `SimOptions::DEFAULT`, …), shown in
+//! `--help` from those constants. Bad values are refused by the library, which names the
+//! setting; this maps the setting to its flag.
+
 use anyhow::Context;
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::builder::PossibleValuesParser;
+use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use swarf::io::Input;
-use swarf::io::Overrides;
+use swarf::io::{Input, Overrides};
 use swarf::job::rough::{RoughOptions, RoughResult, Stage};
+use swarf::job::toolseq::{Decomposition, SeqOptions};
 use swarf::model::Width;
+use swarf::plan::LinkOptions;
 use swarf::post::Post;
-use swarf::strategy::{OffsetOrder, Params, StrategyKind};
+use swarf::sim::{SimEngine, SimOptions};
+use swarf::strategy::{OffsetOrder, Strategy};
+use swarf::{Error, Setting};
 
 /// swarf: CNC roughing toolpaths you can trust.
 #[derive(Parser)]
 #[command(name = "swarf", version, about, long_about = None)]
 struct Cli {
+    /// Log what swarf does to stderr: -v the stages, -vv timings and decisions, -vvv
+    /// everything (`RUST_LOG` works too, e.g. `RUST_LOG=swarf=debug`).
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    verbose: u8,
     #[command(subcommand)]
     cmd: Cmd,
 }
@@ -52,23 +66,6 @@ enum SimArg {
 }
 
 #[derive(Copy, Clone, PartialEq, Eq, ValueEnum)]
-enum StrategyArg {
-    Adaptive,
-    Offset,
-    Zigzag,
-    /// C1 circles along the medial axis, joined by bi-tangent lines (paper 2)
-    Medial,
-    /// One oscillator spiral from the inside out to the walls (paper 4)
-    Spiral,
-}
-
-#[derive(Copy, Clone, PartialEq, Eq, ValueEnum)]
-enum PostArg {
-    Linuxcnc,
-    Grbl,
-}
-
-#[derive(Copy, Clone, PartialEq, Eq, ValueEnum)]
 enum OrderArg {
     InsideOut,
     OutsideIn,
@@ -98,16 +95,17 @@ struct PlacementOpts {
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     part_translate: Option<String>,
     /// STL part on its own: the stock box is its bounds grown by this sideways and on top, mm.
-    #[arg(long, value_name = "MM", default_value_t = 2.0, allow_negative_numbers = true)]
-    stock_margin: f64,
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    stock_margin: Option<f64>,
 }
 
 #[derive(Args, Clone)]
 struct CommonOpts {
     /// Clearing strategy: adaptive (engagement held near the reference, paper 1), offset
-    /// (contour-parallel), zigzag, or medial (C1 circles along the medial axis, paper 2).
-    #[arg(long, value_enum, default_value = "adaptive")]
-    strategy: StrategyArg,
+    /// (contour-parallel), zigzag, medial (C1 circles along the medial axis, paper 2) or spiral
+    /// (one oscillator spiral, paper 4).
+    #[arg(long, value_parser = PossibleValuesParser::new(Strategy::NAMES))]
+    strategy: Option<String>,
     /// Tool diameter, mm (overrides the input).
     #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     tool_diameter: Option<f64>,
@@ -120,7 +118,7 @@ struct CommonOpts {
     /// Largest depth per level, mm.
     #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     stepdown: Option<f64>,
-    /// Depth below the stock top for drawings (DXF, SVG), mm; default 3.
+    /// Depth below the stock top for drawings (DXF, SVG), mm.
     #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     depth: Option<f64>,
     /// Cutting feed, mm/min.
@@ -130,35 +128,36 @@ struct CommonOpts {
     #[arg(long, value_name = "RPM", allow_negative_numbers = true)]
     spindle: Option<f64>,
     /// Controller dialect.
-    #[arg(long, value_enum, default_value = "linuxcnc")]
-    post: PostArg,
+    #[arg(long, value_parser = PossibleValuesParser::new(Post::NAMES))]
+    post: Option<String>,
     /// Conventional instead of climb milling.
     #[arg(long)]
     conventional: bool,
     /// Order of offset passes.
-    #[arg(long, value_enum, default_value = "inside-out")]
-    order: OrderArg,
+    #[arg(long, value_enum)]
+    order: Option<OrderArg>,
     /// Zigzag row angle, degrees.
-    #[arg(long, value_name = "DEG", default_value_t = 0.0, allow_negative_numbers = true)]
-    angle: f64,
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    angle: Option<f64>,
     /// Radial stock the roughing leaves for the finishing contour, mm.
-    #[arg(long, value_name = "MM", default_value_t = 0.0, allow_negative_numbers = true)]
-    stock_to_leave: f64,
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    stock_to_leave: Option<f64>,
     /// Add a finishing contour at every level.
     #[arg(long)]
     finish: bool,
     /// Ramp and helix angle, degrees.
-    #[arg(long, value_name = "DEG", default_value_t = 3.0, allow_negative_numbers = true)]
-    ramp_angle: f64,
-    /// Adaptive: engagement above the reference that wall-following may reach before the tool
-    /// turns back to constant engagement (paper 1 §4.4), degrees.
-    #[arg(long, value_name = "DEG", default_value_t = 20.0, allow_negative_numbers = true)]
-    overshoot: f64,
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    ramp_angle: Option<f64>,
+    /// Adaptive (and the adaptive passes round a spiral's islands): engagement above the
+    /// reference that wall-following may reach before the tool turns back to constant
+    /// engagement (paper 1 §4.4), degrees.
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    overshoot: Option<f64>,
     /// Adaptive: raise the feed where the engagement is low, by up to this factor (chip-thinning
     /// compensation 1/sin θ, smoothed over a tool diameter; paper 1 §5). Medial: the feed of
     /// the cut-back returns through cleared space (paper 2, conclusion). 1 = off.
-    #[arg(long, value_name = "FACTOR", default_value_t = 1.0, allow_negative_numbers = true)]
-    feed_boost: f64,
+    #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
+    feed_boost: Option<f64>,
     /// Links through cleared space as feed moves (G1 at the cutting feed times the feed boost)
     /// instead of rapids at depth: for controls whose G0 is not a straight line.
     #[arg(long)]
@@ -186,11 +185,11 @@ struct CommonOpts {
     #[arg(long)]
     optimise: bool,
     /// Arc-fitting tolerance, mm.
-    #[arg(long, value_name = "MM", default_value_t = 0.002, allow_negative_numbers = true)]
-    arc_tolerance: f64,
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    arc_tolerance: Option<f64>,
     /// Clearance above the top of the job for travel, mm.
-    #[arg(long, value_name = "MM", default_value_t = 5.0, allow_negative_numbers = true)]
-    clearance: f64,
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    clearance: Option<f64>,
     /// Simulation cell size, mm (default: tool diameter / 100 within [0.02, 0.1]); with
     /// `--sim sdf`, the distance fields' sample spacing.
     #[arg(long, value_name = "MM", allow_negative_numbers = true)]
@@ -198,17 +197,17 @@ struct CommonOpts {
     /// Simulator for the report: `raster` (cell heights, exact engagement from the cleared
     /// geometry) or `sdf` (sampled signed distance fields per slab, engagement by root finding
     /// on the field; 2.5D jobs only). Planning always uses the raster.
-    #[arg(long, value_enum, default_value = "raster")]
-    sim: SimArg,
+    #[arg(long, value_enum)]
+    sim: Option<SimArg>,
     /// Skip the simulation (no engagement, gouge or rest figures).
     #[arg(long)]
     no_simulate: bool,
-    /// SVG pixels per inch (96; old Inkscape files use 90).
-    #[arg(long, value_name = "PX", default_value_t = 96.0, allow_negative_numbers = true)]
-    svg_dpi: f64,
+    /// SVG pixels per inch (old Inkscape files use 90).
+    #[arg(long, value_name = "PX", allow_negative_numbers = true)]
+    svg_dpi: Option<f64>,
     /// Tolerance for joining loose drawing entities into contours, mm.
-    #[arg(long, value_name = "MM", default_value_t = 0.01, allow_negative_numbers = true)]
-    chain_tolerance: f64,
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    chain_tolerance: Option<f64>,
     #[command(flatten)]
     place: PlacementOpts,
     /// No progress bar.
@@ -260,20 +259,20 @@ struct PlanArgs {
     #[arg(long, value_name = "PLAN.json")]
     report: Option<PathBuf>,
     /// How later tools are confined to the rest material.
-    #[arg(long, value_enum, default_value = "trim")]
-    decomposition: DecompositionArg,
+    #[arg(long, value_enum)]
+    decomposition: Option<DecompositionArg>,
     /// Cost every candidate sequence (no bound).
     #[arg(long)]
     exhaustive: bool,
     /// Controller dialect.
-    #[arg(long, value_enum, default_value = "linuxcnc")]
-    post: PostArg,
+    #[arg(long, value_parser = PossibleValuesParser::new(Post::NAMES))]
+    post: Option<String>,
     /// Largest ramp angle of an entry, degrees.
-    #[arg(long, value_name = "DEG", default_value_t = 3.0, allow_negative_numbers = true)]
-    ramp_angle: f64,
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
+    ramp_angle: Option<f64>,
     /// Clearance above the top of the job for travel, mm.
-    #[arg(long, value_name = "MM", default_value_t = 2.0, allow_negative_numbers = true)]
-    clearance: f64,
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    clearance: Option<f64>,
     /// No pictures of the rest material.
     #[arg(long)]
     no_pictures: bool,
@@ -314,8 +313,137 @@ struct Failure {
 
 impl From<swarf::Error> for Failure {
     fn from(e: swarf::Error) -> Self {
-        Failure { user: e.is_user_error(), msg: e.to_string() }
+        let user = e.is_user_error();
+        let msg = match &e {
+            // (the library names the setting; the user knows it by its flag)
+            Error::Setting { setting, reason } => match flag(*setting) {
+                Some(f) => format!("{f}: {reason}"),
+                None => e.to_string(),
+            },
+            _ => e.to_string(),
+        };
+        Failure { user, msg }
     }
+}
+
+/// The flag that sets a setting, where one does.
+fn flag(s: Setting) -> Option<&'static str> {
+    Some(match s {
+        Setting::ToolDiameter => "--tool-diameter",
+        Setting::Stepover => "--stepover",
+        Setting::Engagement => "--engagement",
+        Setting::Feed => "--feed",
+        Setting::SpindleSpeed => "--spindle",
+        Setting::Stepdown => "--stepdown",
+        Setting::Depth => "--depth",
+        Setting::StockMargin => "--stock-margin",
+        Setting::PartScale => "--part-scale",
+        Setting::PartRotate => "--part-rotate",
+        Setting::PartTranslate => "--part-translate",
+        Setting::ChainTolerance => "--chain-tolerance",
+        Setting::SvgDpi => "--svg-dpi",
+        Setting::StockToLeave => "--stock-to-leave",
+        Setting::RampAngle | Setting::SeqRampAngle => "--ramp-angle",
+        Setting::ArcTolerance => "--arc-tolerance",
+        Setting::Clearance | Setting::SeqClearance => "--clearance",
+        Setting::FeedBoost => "--feed-boost",
+        Setting::Overshoot => "--overshoot",
+        Setting::ZigzagAngle => "--angle",
+        Setting::Zeta => "--zeta",
+        Setting::SpiralFloor => "--spiral-floor",
+        Setting::SpiralStart => "--spiral-start",
+        Setting::Resolution => "--res",
+        Setting::SimEngine => "--sim",
+        Setting::OscillatorStepover => "--spiral",
+        Setting::RapidRate
+        | Setting::Floor
+        | Setting::StockTop
+        | Setting::PartTop
+        | Setting::Allowance
+        | Setting::AllowanceFloor
+        | Setting::StockBox
+        | Setting::FlattenTolerance
+        | Setting::HelixRadius
+        | Setting::Approach
+        | Setting::EntryFeed
+        | Setting::Simulation
+        | Setting::Oscillator => return None,
+    })
+}
+
+/// What the library does when an option is left out, for `--help`: (subcommand, argument id,
+/// value), read from the library's defaults.
+fn library_defaults() -> Vec<(&'static str, &'static str, String)> {
+    let num = |v: f64| swarf::post::num(v, 6);
+    let l = LinkOptions::DEFAULT;
+    let o = Overrides::DEFAULT;
+    let seq = SeqOptions::DEFAULT;
+    let mut v = Vec::new();
+    for cmd in ["rough", "demo"] {
+        v.extend([
+            (cmd, "strategy", Strategy::DEFAULT.name().to_string()),
+            (cmd, "tool_diameter", format!("{} for drawings and STL parts", num(swarf::model::Tool::DEFAULT.diameter))),
+            (cmd, "stepover", num(swarf::model::Width::DEFAULT.stepover()) + " for drawings and STL parts"),
+            (cmd, "depth", num(Overrides::DEFAULT_DEPTH)),
+            (cmd, "feed", format!("{} for drawings and STL parts", num(swarf::model::Cutting::DEFAULT.feed))),
+            (cmd, "spindle", format!("{} for drawings and STL parts", num(swarf::model::Cutting::DEFAULT.spindle_rpm))),
+            (cmd, "post", Post::DEFAULT.name().to_string()),
+            (cmd, "order", order_name(swarf::strategy::OffsetOptions::DEFAULT.order).to_string()),
+            (cmd, "angle", num(swarf::strategy::ZigzagOptions::DEFAULT.angle_deg)),
+            (cmd, "stock_to_leave", num(l.stock_to_leave)),
+            (cmd, "ramp_angle", num(l.ramp_angle_deg)),
+            (cmd, "overshoot", num(swarf::strategy::AdaptiveOptions::DEFAULT.overshoot_deg)),
+            (cmd, "feed_boost", num(l.feed_boost)),
+            (cmd, "arc_tolerance", num(l.arc_tol)),
+            (cmd, "clearance", num(l.clearance)),
+            (cmd, "sim", SimEngine::default().name().to_string()),
+            (cmd, "svg_dpi", num(o.import.svg_px_per_inch)),
+            (cmd, "chain_tolerance", num(o.import.chain_tolerance)),
+            (cmd, "stock_margin", num(o.stock_margin)),
+        ]);
+    }
+    v.extend([
+        ("plan", "decomposition", decomposition_name(seq.decomposition).to_string()),
+        ("plan", "post", Post::DEFAULT.name().to_string()),
+        ("plan", "ramp_angle", num(seq.ramp_deg)),
+        ("plan", "clearance", num(seq.clearance)),
+        ("plan", "stock_margin", num(o.stock_margin)),
+    ]);
+    v
+}
+
+/// The flag's name of an offset order.
+fn order_name(o: OffsetOrder) -> &'static str {
+    match o {
+        OffsetOrder::InsideOut => "inside-out",
+        OffsetOrder::OutsideIn => "outside-in",
+    }
+}
+
+/// The flag's name of a decomposition.
+fn decomposition_name(d: Decomposition) -> &'static str {
+    match d {
+        Decomposition::Trim => "trim",
+        Decomposition::Regions => "regions",
+    }
+}
+
+/// The command with the library's defaults in the help of the options that have one.
+fn command() -> clap::Command {
+    let mut cmd = Cli::command();
+    for (sub, id, value) in library_defaults() {
+        cmd = cmd.mut_subcommand(sub, |c| {
+            c.mut_arg(id, |a| {
+                let help = a.get_help().map(|h| h.to_string()).unwrap_or_default();
+                let a = a.help(format!("{help} [default: {value}]"));
+                match a.get_long_help().map(|h| h.to_string()) {
+                    Some(long) => a.long_help(format!("{long}\n\n[default: {value}]")),
+                    None => a,
+                }
+            })
+        });
+    }
+    cmd
 }
 
 impl From<anyhow::Error> for Failure {
@@ -325,7 +453,7 @@ impl From<anyhow::Error> for Failure {
 }
 
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    let cli = match command().try_get_matches().and_then(|m| Cli::from_arg_matches(&m)) {
         Ok(c) => c,
         Err(e) => {
             if !e.use_stderr() {
@@ -340,6 +468,21 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    let level = match cli.verbose {
+        0 => log::LevelFilter::Warn,
+        1 => log::LevelFilter::Info,
+        2 => log::LevelFilter::Debug,
+        _ => log::LevelFilter::Trace,
+    };
+    // (swarf's own messages at the level asked for; the libraries it uses only when they fail,
+    // unless RUST_LOG says otherwise)
+    env_logger::Builder::new()
+        .filter_level(log::LevelFilter::Error)
+        .filter_module("swarf", level)
+        .filter_module("swarf_import", level)
+        .parse_default_env()
+        .format_target(false)
+        .init();
     let res = match cli.cmd {
         Cmd::Rough(a) => rough(a),
         Cmd::Plan(a) => plan(a),
@@ -356,8 +499,8 @@ fn main() -> ExitCode {
     }
 }
 
+/// The overrides of the input the options give.
 fn overrides(o: &CommonOpts) -> Result<Overrides, Failure> {
-    let ov = placement(&o.place)?;
     let mut ov = Overrides {
         tool_diameter: o.tool_diameter,
         width: match (o.engagement, o.stepover) {
@@ -369,139 +512,133 @@ fn overrides(o: &CommonOpts) -> Result<Overrides, Failure> {
         depth: o.depth,
         feed: o.feed,
         spindle_rpm: o.spindle,
-        ..ov
+        ..placement(&o.place)?
     };
-    ov.import.svg_px_per_inch = o.svg_dpi;
-    ov.import.chain_tolerance = o.chain_tolerance;
+    if let Some(d) = o.svg_dpi {
+        ov.import.svg_px_per_inch = d;
+    }
+    if let Some(t) = o.chain_tolerance {
+        ov.import.chain_tolerance = t;
+    }
     Ok(ov)
 }
 
 /// The overrides of units and of an STL part's placement.
 fn placement(o: &PlacementOpts) -> Result<Overrides, Failure> {
-    let mut ov = Overrides::default();
+    let mut ov = Overrides::DEFAULT;
     ov.import.units = o.units.map(|u| match u {
         UnitsArg::Mm => swarf::swarf_import::Units::Millimetre,
         UnitsArg::In => swarf::swarf_import::Units::Inch,
         UnitsArg::Cm => swarf::swarf_import::Units::Centimetre,
         UnitsArg::M => swarf::swarf_import::Units::Metre,
     });
-    let triple = |v: &Option<String>, name: &str| -> Result<Option<[f64; 3]>, Failure> {
-        let Some(t) = v else { return Ok(None) };
-        let parts: Vec<Option<f64>> =
-            t.split(',').map(|x| x.trim().parse::<f64>().ok().filter(|v| v.is_finite())).collect();
-        match parts.as_slice() {
-            [Some(a), Some(b), Some(c)] => Ok(Some([*a, *b, *c])),
-            _ => Err(swarf::Error::param(name, format!("{t:?}: expected three numbers X,Y,Z")).into()),
-        }
-    };
-    if let Some(r) = triple(&o.part_rotate, "--part-rotate")? {
-        ov.placement.rotate_deg = r;
+    if let Some(r) = &o.part_rotate {
+        ov.placement.rotate_deg = triple(r, Setting::PartRotate)?;
     }
-    if let Some(t) = triple(&o.part_translate, "--part-translate")? {
-        ov.placement.translate = swarf::geom::DVec3::from_array(t);
+    if let Some(t) = &o.part_translate {
+        ov.placement.translate = swarf::geom::DVec3::from_array(triple(t, Setting::PartTranslate)?);
     }
     if let Some(sc) = o.part_scale {
-        if !(sc.is_finite() && sc != 0.0) {
-            return Err(swarf::Error::param("--part-scale", format!("{sc}: must be a non-zero number")).into());
-        }
         ov.placement.scale = sc;
     }
-    if !(o.stock_margin.is_finite() && o.stock_margin >= 0.0) {
-        return Err(swarf::Error::param("--stock-margin", "must be zero or positive").into());
+    if let Some(m) = o.stock_margin {
+        ov.stock_margin = m;
     }
-    ov.stock_margin = o.stock_margin;
     Ok(ov)
+}
+
+/// Parses `X,Y,Z`.
+fn triple(t: &str, setting: Setting) -> Result<[f64; 3], Failure> {
+    let parts: Vec<Option<f64>> = t.split(',').map(|x| x.trim().parse::<f64>().ok()).collect();
+    match parts.as_slice() {
+        [Some(a), Some(b), Some(c)] => Ok([*a, *b, *c]),
+        _ => Err(Error::setting(setting, format!("{t:?}: expected three numbers X,Y,Z")).into()),
+    }
 }
 
 /// Parses `X,Y` (for `--spiral-start`).
 fn pair(t: &str) -> Result<swarf::geom::DVec2, Failure> {
-    let v: Vec<f64> = t
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| swarf::Error::param("--spiral-start", format!("{t:?}: expected two numbers X,Y (mm)")))?;
-    match v[..] {
-        [x, y] if x.is_finite() && y.is_finite() => Ok(swarf::geom::DVec2::new(x, y)),
-        _ => Err(swarf::Error::param("--spiral-start", format!("{t:?}: expected two numbers X,Y (mm)")).into()),
+    let v: Vec<Option<f64>> = t.split(',').map(|x| x.trim().parse::<f64>().ok()).collect();
+    match v.as_slice() {
+        [Some(x), Some(y)] => Ok(swarf::geom::DVec2::new(*x, *y)),
+        _ => Err(Error::setting(Setting::SpiralStart, format!("{t:?}: expected two numbers X,Y (mm)")).into()),
     }
 }
 
-fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> {
-    let params = Params {
-        strategy: match o.strategy {
-            StrategyArg::Adaptive => StrategyKind::Adaptive,
-            StrategyArg::Offset => StrategyKind::Offset,
-            StrategyArg::Zigzag => StrategyKind::Zigzag,
-            StrategyArg::Medial => StrategyKind::Medial,
-            StrategyArg::Spiral => StrategyKind::Spiral,
-        },
-        climb: !o.conventional,
-        offset_order: match o.order {
-            OrderArg::InsideOut => OffsetOrder::InsideOut,
-            OrderArg::OutsideIn => OffsetOrder::OutsideIn,
-        },
-        zigzag_angle_deg: o.angle,
-        stock_to_leave: o.stock_to_leave,
-        finish: o.finish,
-        ramp_angle_deg: o.ramp_angle,
-        overshoot_deg: o.overshoot,
-        feed_boost: o.feed_boost,
-        feed_links: o.feed_links,
-        medial_cut_back: !o.full_circles,
-        spiral_zeta: o.zeta,
-        spiral_start: match &o.spiral_start {
-            Some(t) => Some(pair(t)?),
-            None => None,
-        },
-        spiral_floor: o.spiral_floor,
-        spiral_optimise: o.optimise,
-        arc_tol: o.arc_tolerance,
-        clearance: o.clearance,
-        ..Default::default()
+/// The post an option names (the library's default when none).
+fn post_of(name: &Option<String>) -> Post {
+    name.as_deref().and_then(Post::parse).unwrap_or(Post::DEFAULT)
+}
+
+/// The strategy the options name, with the options of it they set. The options of every
+/// strategy the flags give are checked, whichever strategy runs: a bad value is an error even
+/// where it would not be used.
+fn strategy_of(o: &CommonOpts) -> Result<Strategy, Failure> {
+    use swarf::strategy::{AdaptiveOptions, MedialOptions, OffsetOptions, SpiralOptions, ZigzagOptions};
+    let adaptive = AdaptiveOptions {
+        overshoot_deg: o.overshoot.unwrap_or(AdaptiveOptions::DEFAULT.overshoot_deg),
+        ..AdaptiveOptions::DEFAULT
     };
-    if let Some(z) = o.zeta
-        && !(z.is_finite() && z > 0.0 && z <= 1.0)
-    {
-        return Err(swarf::Error::param("--zeta", format!("{z}: ζ must be in (0, 1]")).into());
+    let order = match o.order {
+        Some(OrderArg::InsideOut) => OffsetOrder::InsideOut,
+        Some(OrderArg::OutsideIn) => OffsetOrder::OutsideIn,
+        None => OffsetOptions::DEFAULT.order,
+    };
+    let all = [
+        Strategy::Adaptive(adaptive.clone()),
+        Strategy::Offset(OffsetOptions { order }),
+        Strategy::Zigzag(ZigzagOptions { angle_deg: o.angle.unwrap_or(ZigzagOptions::DEFAULT.angle_deg) }),
+        Strategy::Medial(MedialOptions { cut_back: !o.full_circles }),
+        Strategy::Spiral(SpiralOptions {
+            zeta: o.zeta,
+            start: o.spiral_start.as_deref().map(pair).transpose()?,
+            floor: o.spiral_floor,
+            optimise: o.optimise,
+            adaptive,
+        }),
+    ];
+    for s in &all {
+        s.validate()?;
     }
-    if let Some(f) = o.spiral_floor
-        && !(f.is_finite() && f > 0.0 && f <= 1.0)
-    {
-        return Err(swarf::Error::param("--spiral-floor", format!("{f}: the floor must be in (0, 1]")).into());
-    }
-    if let Some(r) = o.res
-        && !(r.is_finite() && r > 0.0)
-    {
-        return Err(swarf::Error::param("--res", format!("{r} mm: the cell size must be positive")).into());
-    }
-    if !(o.svg_dpi.is_finite() && o.svg_dpi > 0.0) {
-        return Err(swarf::Error::param("--svg-dpi", "must be positive").into());
-    }
-    if let Some(sp) = o.spindle
-        && !(sp.is_finite() && sp > 0.0)
-    {
-        return Err(swarf::Error::param("--spindle", format!("{sp} rpm: the spindle speed must be positive")).into());
-    }
-    if !(o.chain_tolerance.is_finite() && o.chain_tolerance >= 0.0) {
-        return Err(swarf::Error::param("--chain-tolerance", "must be zero or positive").into());
-    }
-    Ok(RoughOptions {
-        params,
-        post: match o.post {
-            PostArg::Linuxcnc => Post::LinuxCnc,
-            PostArg::Grbl => Post::Grbl,
+    let name = o.strategy.as_deref().unwrap_or(Strategy::DEFAULT.name());
+    all.into_iter()
+        .find(|s| s.name() == name)
+        .ok_or_else(|| Failure { user: true, msg: format!("--strategy: unknown strategy {name:?}") })
+}
+
+/// The options of `rough` the flags give, on top of the library's defaults.
+fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> {
+    let d = LinkOptions::DEFAULT;
+    let link = LinkOptions {
+        climb: !o.conventional,
+        stock_to_leave: o.stock_to_leave.unwrap_or(d.stock_to_leave),
+        finish: o.finish,
+        ramp_angle_deg: o.ramp_angle.unwrap_or(d.ramp_angle_deg),
+        arc_tol: o.arc_tolerance.unwrap_or(d.arc_tol),
+        clearance: o.clearance.unwrap_or(d.clearance),
+        feed_boost: o.feed_boost.unwrap_or(d.feed_boost),
+        feed_links: o.feed_links,
+        ..d
+    };
+    let sim = SimOptions {
+        res: o.res,
+        engine: match o.sim {
+            Some(SimArg::Raster) => SimEngine::Raster,
+            Some(SimArg::Sdf) => SimEngine::Sdf,
+            None => SimOptions::DEFAULT.engine,
         },
-        sim: swarf::sim::SimOptions {
-            res: o.res,
-            engine: match o.sim {
-                SimArg::Raster => swarf::sim::SimEngine::Raster,
-                SimArg::Sdf => swarf::sim::SimEngine::Sdf,
-            },
-            ..Default::default()
-        },
+        ..SimOptions::DEFAULT
+    };
+    let opts = RoughOptions {
+        strategy: strategy_of(o)?,
+        link,
+        post: post_of(&o.post),
+        sim,
         simulate: !o.no_simulate,
         input_name,
-    })
+    };
+    opts.validate()?;
+    Ok(opts)
 }
 
 fn run(job: &swarf::model::Job, opts: &RoughOptions, quiet: bool) -> Result<RoughResult, Failure> {
@@ -601,7 +738,10 @@ fn write_outputs(scene: impl FnOnce() -> Scene, res: &RoughResult, out: &Outputs
     }
     if let Some(p) = &out.samples {
         let Some(replay) = &res.replay else {
-            return Err(swarf::Error::param("--samples", "the samples need the simulation (drop --no-simulate)").into());
+            return Err(Failure {
+                user: true,
+                msg: "--samples: the samples need the simulation (drop --no-simulate)".into(),
+            });
         };
         let mut csv = String::from("cut_length_mm,x,y,z,tea_deg,tea_pixel_deg,kind,bore,move\n");
         for sm in &replay.samples {
@@ -627,7 +767,10 @@ fn write_outputs(scene: impl FnOnce() -> Scene, res: &RoughResult, out: &Outputs
     }
     if out.plot_svg.is_some() || out.plot_png.is_some() {
         let Some(replay) = &res.replay else {
-            return Err(swarf::Error::param("--plot", "the picture needs the simulation (drop --no-simulate)").into());
+            return Err(Failure {
+                user: true,
+                msg: "--plot: the picture needs the simulation (drop --no-simulate)".into(),
+            });
         };
         let scene = scene();
         let fig = swarf::plot::Figure {
@@ -717,7 +860,9 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
 
 fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
     let mut job = swarf::io::example_job();
-    swarf::io::apply(&mut job, &overrides(o)?);
+    let ov = overrides(o)?;
+    ov.validate()?;
+    ov.apply_to_job(&mut job);
     job.validate()?;
     std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create the folder", dir.display()))?;
     let opts = options(o, "demo_pocket (built-in)".into())?;
@@ -750,25 +895,22 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
         );
     };
     let db = swarf::model::tooldb::ToolDb::read(&a.tools)?;
-    if !(a.clearance.is_finite() && a.clearance >= 0.0) {
-        return Err(swarf::Error::param("--clearance", "must be zero or positive").into());
-    }
-    let opts = swarf::job::toolseq::SeqOptions {
+    let d = SeqOptions::DEFAULT;
+    let opts = SeqOptions {
         decomposition: match a.decomposition {
-            DecompositionArg::Trim => swarf::job::toolseq::Decomposition::Trim,
-            DecompositionArg::Regions => swarf::job::toolseq::Decomposition::Regions,
+            Some(DecompositionArg::Trim) => Decomposition::Trim,
+            Some(DecompositionArg::Regions) => Decomposition::Regions,
+            None => d.decomposition,
         },
         prune: !a.exhaustive,
-        ramp_deg: a.ramp_angle,
-        clearance: a.clearance,
+        ramp_deg: a.ramp_angle.unwrap_or(d.ramp_deg),
+        clearance: a.clearance.unwrap_or(d.clearance),
     };
+    opts.validate()?;
     let t0 = std::time::Instant::now();
     let sp = swarf::job::toolseq::plan(&job, &db, &opts)?;
     let compute_s = t0.elapsed().as_secs_f64();
-    let post = match a.post {
-        PostArg::Linuxcnc => Post::LinuxCnc,
-        PostArg::Grbl => Post::Grbl,
-    };
+    let post = post_of(&a.post);
     let best = sp.best();
     let input_name = a.input.file_name().and_then(|s| s.to_str()).unwrap_or("input").to_string();
     let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();

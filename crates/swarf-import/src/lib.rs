@@ -137,9 +137,15 @@ pub struct ImportOptions {
     pub svg_px_per_inch: f64,
 }
 
+impl ImportOptions {
+    /// The units the file says, 0.01 mm chaining, 0.002 mm flattening, 96 SVG pixels per inch.
+    pub const DEFAULT: ImportOptions =
+        ImportOptions { units: None, chain_tolerance: 0.01, flatten_tolerance: 0.002, svg_px_per_inch: 96.0 };
+}
+
 impl Default for ImportOptions {
     fn default() -> Self {
-        Self { units: None, chain_tolerance: 0.01, flatten_tolerance: 0.002, svg_px_per_inch: 96.0 }
+        Self::DEFAULT
     }
 }
 

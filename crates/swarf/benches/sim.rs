@@ -54,7 +54,7 @@ fn prepare(name: &'static str) -> Case {
     let opts = RoughOptions::default();
     let planned = plan(&job, &opts).expect("plan").expect("a program");
     let (regions, tp) = (planned.regions, planned.toolpath);
-    let res = opts.sim.res_for(job.tool.diameter);
+    let res = opts.sim.res_for(job.cutting.tool.diameter);
     // the same engagement sample points for every engine
     let raster = SimOptions { sample_step: Some(res / 2.0), ..Default::default() };
     let run = |o: &SimOptions| simulate(&job, &regions, o, &tp, &mut |_| {}).expect("simulate");

@@ -24,7 +24,7 @@ use swarf::job::rough::{RoughOptions, rough};
 use swarf::model::Job;
 use swarf::sim::sweep::Path;
 use swarf::sim::{RasterSim, SampleKind, SimOptions};
-use swarf::strategy::{Params, StrategyKind};
+use swarf::strategy::Strategy;
 use swarf::toolpath::Toolpath;
 
 fn case() -> Job {
@@ -33,12 +33,12 @@ fn case() -> Job {
     swarf::io::case::parse_case(std::path::Path::new(path), &text).expect("case")
 }
 
-fn options(strategy: StrategyKind, simulate: bool) -> RoughOptions {
-    RoughOptions { params: Params { strategy, ..Params::default() }, simulate, ..RoughOptions::default() }
+fn options(strategy: &str, simulate: bool) -> RoughOptions {
+    RoughOptions { strategy: Strategy::from_name(strategy).expect("a strategy"), simulate, ..RoughOptions::default() }
 }
 
 fn program(job: &Job) -> Toolpath {
-    rough(job, &options(StrategyKind::Offset, false), &mut |_, _| {}).expect("rough").toolpath
+    rough(job, &options("offset", false), &mut |_, _| {}).expect("rough").toolpath
 }
 
 fn fresh_sim(job: &Job) -> RasterSim {
@@ -163,11 +163,11 @@ fn plan(c: &mut Criterion) {
     let job = case();
     let mut g = c.benchmark_group("plan");
     g.sample_size(10).warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(12));
-    for s in [StrategyKind::Adaptive, StrategyKind::Offset, StrategyKind::Zigzag] {
+    for s in ["adaptive", "offset", "zigzag"] {
         let opts = options(s, false);
         let out = rough(&job, &opts, &mut |_, _| {}).expect("rough");
-        eprintln!("plan/{}: {} moves, compute {:.3} s", s.name(), out.toolpath.moves.len(), out.report.compute_s);
-        g.bench_function(s.name(), |b| {
+        eprintln!("plan/{}: {} moves, compute {:.3} s", s, out.toolpath.moves.len(), out.report.compute_s);
+        g.bench_function(s, |b| {
             b.iter(|| black_box(rough(&job, &opts, &mut |_, _| {}).expect("rough").toolpath.moves.len()))
         });
     }
@@ -188,7 +188,7 @@ fn edt(c: &mut Criterion) {
 
 fn full(c: &mut Criterion) {
     let job = case();
-    let opts = options(StrategyKind::Offset, true);
+    let opts = options("offset", true);
     let out = rough(&job, &opts, &mut |_, _| {}).expect("rough");
     eprintln!(
         "rough/offset+sim: compute {:.3} s, simulate {:.3} s, max TEA {:.1}°, rest {:.5}",

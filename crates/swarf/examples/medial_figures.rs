@@ -16,8 +16,9 @@ use std::path::Path;
 use swarf::geom::medial::medial_axis;
 use swarf::geom::{Area, DVec2};
 use swarf::job::rough::{RoughOptions, rough};
+use swarf::plan::{LayerGeom, LinkOptions};
 use swarf::strategy::medial::{MIN_OBJECT_ANGLE, region, runs};
-use swarf::strategy::{LayerGeom, Params, StrategyKind, wall_margin};
+use swarf::strategy::{MedialOptions, Strategy};
 use swarf::toolpath::{Motion, MoveKind, Toolpath};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -27,9 +28,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     // the axis and the circles
     let job = swarf::io::load_job(&cases.join("pocket_islands.json"), &Default::default())?;
-    let params = Params { strategy: StrategyKind::Medial, ..Default::default() };
-    let regions = job.regions(job.radius(), wall_margin(&params))?;
-    let geom = LayerGeom::new(&job, &regions, &params)?;
+    let link = LinkOptions::DEFAULT;
+    let margin = Strategy::Medial(MedialOptions::DEFAULT).wall_margin(&link);
+    let regions = job.regions(job.radius(), margin)?;
+    let geom = LayerGeom::new(&job, &regions, &link, margin)?;
     let c = region(&regions, &geom);
     let axis = medial_axis(&c, MIN_OBJECT_ANGLE)?;
     let rs = runs(&axis, geom.step, geom.r);
@@ -63,10 +65,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut panels = Vec::new();
     let mut names = Vec::new();
     for (i, cut_back) in [false, true].into_iter().enumerate() {
-        let opts = RoughOptions {
-            params: Params { strategy: StrategyKind::Medial, medial_cut_back: cut_back, ..Default::default() },
-            ..Default::default()
-        };
+        let opts = RoughOptions { strategy: Strategy::Medial(MedialOptions { cut_back }), ..Default::default() };
         let res = rough(&job, &opts, &mut |_, _| {})?;
         let mut p = Panel::new(&job.stock, i as f64 * 620.0, 600.0);
         p.area(&job.part, "#3a3a3a", "none");

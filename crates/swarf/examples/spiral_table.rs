@@ -6,7 +6,7 @@
 //! `cargo run --release -p swarf --example spiral_table -- examples/cases/round_pocket.json ...`
 
 use swarf::job::rough::RoughOptions;
-use swarf::strategy::StrategyKind;
+use swarf::strategy::SpiralOptions;
 use swarf::strategy::spiral::Trial;
 use swarf::strategy::spiral_search::spiral_study;
 
@@ -35,10 +35,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for path in std::env::args().skip(1) {
         let text = std::fs::read(&path)?;
         let job = swarf::io::case::parse_case(std::path::Path::new(&path), &text)?;
-        let mut opts = RoughOptions::default();
-        opts.params.strategy = StrategyKind::Spiral;
+        let opts = RoughOptions::default();
         let name = std::path::Path::new(&path).file_stem().map_or(path.clone(), |s| s.to_string_lossy().into_owned());
-        let st = spiral_study(&job, &opts.params, &opts.sim)?;
+        let st = spiral_study(&job, &SpiralOptions::DEFAULT, &opts.link, &opts.sim)?;
         for (what, (choice, trials)) in [("default", &st.default), ("--optimise", &st.optimised)] {
             if let Some(t) = trials.iter().find(|t| t.choice == *choice) {
                 row(&name, what, t);

@@ -4,34 +4,64 @@
 //! on a material simulation: no gouge, bounded tool engagement, little air cutting, full
 //! clearing.
 //!
-//! The data flows one way:
+//! ## The entry points
+//!
+//! - [`load_input`] reads a case (JSON), a drawing (DXF, SVG) or an STL part into an [`Input`]:
+//!   a 2.5D [`Job`] or a 3D [`MeshJob`], with the user's [`Overrides`];
+//! - [`rough`] roughs a 2.5D job with a [`Strategy`] ([`RoughOptions`]): the program, its
+//!   G-code, its [`Report`] and the simulation that proves it;
+//! - [`rough_mesh`] roughs a 3D job in z-levels (paper 3), each level a 2.5D job;
+//! - [`plan_tools`] finds the cheapest sequence of tools from a tool database for a 3D job
+//!   (paper 3), one program per tool.
+//!
+//! Every options struct has its defaults in one place (`DEFAULT`) and a `validate` that the
+//! entry points call: a bad value is an [`Error::Setting`] naming the [`Setting`].
+//!
+//! ```
+//! use swarf::{RoughOptions, Strategy, rough};
+//! let job = swarf::example_job();
+//! let opts = RoughOptions { strategy: Strategy::from_name("offset").unwrap(), simulate: false, ..RoughOptions::DEFAULT };
+//! let out = rough(&job, &opts, &mut |_, _| {})?;
+//! assert!(out.gcode.starts_with("(swarf "));
+//! assert!(out.report.cut_length_mm > 0.0);
+//! # Ok::<(), swarf::Error>(())
+//! ```
+//!
+//! ## The layers
+//!
+//! Each folder uses only the ones below it:
 //!
 //! ```text
-//! inputs ──► model ──► strategy ──► plan (links, entries) ──► post ──► G-code
-//! (io)       (model)   (strategy)    (plan)         │          (post)
-//!                                                   └──► sim ──► report, plot
+//!  job       rough (2.5D)   zlevel (3D)   toolseq (tool sequence)        the jobs a user runs
+//!  strategy  adaptive  offset  zigzag  medial  spiral (+ its search)    what the tool does at a level
+//!  plan      linker (entries, links, retracts)   levels (the driver)   pass types, LinkOptions
+//!  io · report · plot                                                   readers, figures, pictures
+//!  sim · post                                                           material models, G-code
+//!  toolpath                                                             the move list
+//!  model · implicit                                                     Job, MeshJob, cutting data;
+//!                                                                       R-function shapes, spirals
+//!  geom                                                                 areas, meshes, arcs
 //! ```
 //!
-//! - [`io`]: the case format (JSON) and drawings (DXF, SVG, through `swarf-import`) into a
-//!   [`model::Job`];
-//! - [`geom`]: areas with holes, robust booleans and offsets, Douglas–Peucker, arc fitting;
+//! - [`geom`]: areas with holes, robust booleans and offsets, Douglas–Peucker, arc fitting,
+//!   meshes and their shadows;
+//! - [`model`]: the 2.5D job (paper 1 §4), the mesh job, the cutting data, the tool database;
 //! - [`implicit`]: R-function shapes and oscillator spirals over their level sets (paper 4);
-//! - [`strategy`]: zigzag and contour-parallel offset clearing (plus clean-up);
-//! - [`plan`]: entries (helix, ramp, plunge as the last resort), keep-down links, retracts;
 //! - [`toolpath`]: the move list everything downstream reads;
-//! - [`sim`]: the raster material model with pixel and exact engagement, gouges, rest;
+//! - [`sim`]: the raster and distance-field material models (engagement, gouges, rest);
 //! - [`post`]: LinuxCNC and GRBL dialects;
-//! - [`report`], [`plot`]: the figures and the picture.
+//! - [`io`], [`report`], [`plot`]: readers, the figures and the pictures;
+//! - [`plan`]: entries (helix, ramp, plunge as the last resort), keep-down links, retracts, the
+//!   level driver;
+//! - [`strategy`]: the five clearing strategies;
+//! - [`job`]: rough, z-level and tool-sequence jobs.
 //!
-//! ```no_run
-//! use swarf::pipeline::{rough, RoughOptions};
-//! let job = swarf::io::load_job("pocket.json".as_ref(), &Default::default()).unwrap();
-//! let out = rough(&job, &RoughOptions::default(), &mut |_, _| {}).unwrap();
-//! std::fs::write("pocket.ngc", &out.gcode).unwrap();
-//! println!("max engagement {:.1}°, {} gouges", out.report.engagement_deg.max, out.report.gouges);
-//! ```
+//! Progress and timings are logged through the [`log`] crate (`debug` and `trace` levels); a
+//! program that wants them installs a logger.
 
-pub mod error;
+#![warn(missing_docs)]
+
+mod error;
 pub mod geom;
 pub mod implicit;
 pub mod io;
@@ -45,5 +75,16 @@ pub mod sim;
 pub mod strategy;
 pub mod toolpath;
 
-pub use error::{Error, Result};
+pub use error::{Error, Result, Setting};
+pub use io::{Input, Overrides, example_job, load_input, load_job};
+pub use job::rough::{RoughOptions, RoughResult, Stage, rough};
+pub use job::toolseq::{SeqOptions, SeqPlan, plan as plan_tools};
+pub use job::zlevel::rough as rough_mesh;
+pub use model::{Cutting, Job, MeshJob, Tool, Width};
+pub use plan::LinkOptions;
+pub use post::Post;
+pub use report::Report;
+pub use sim::{SimEngine, SimOptions};
+pub use strategy::Strategy;
 pub use swarf_import;
+pub use toolpath::Toolpath;

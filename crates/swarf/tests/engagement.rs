@@ -7,7 +7,7 @@
 
 use swarf::geom::{Area, DVec2, DVec3};
 use swarf::job::rough::{RoughOptions, rough};
-use swarf::model::{Job, Tool, Width};
+use swarf::model::{Cutting, Job, Tool, Width};
 use swarf::sim::{RasterSim, Replay, Sample, SampleKind, SimOptions};
 use swarf::toolpath::{MoveKind, Toolpath};
 
@@ -24,7 +24,7 @@ const MIDDLE: f64 = 12.0;
 
 fn job(d: f64) -> Job {
     Job {
-        width: Width::Stepover(0.25),
+        cutting: Cutting::with_tool_diameter(d).with_width(Width::Stepover(0.25)),
         ..Job::new("engagement", Area::rect(-HALF, -HALF, HALF, HALF), Area::empty(), d, 5.0)
     }
 }
@@ -470,10 +470,7 @@ fn pixel_follows_exact_on_a_real_program() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/cases/pocket_islands.json");
     let text = std::fs::read(path).expect("examples/cases/pocket_islands.json");
     let job = swarf::io::case::parse_case(std::path::Path::new(path), &text).expect("case");
-    let opts = RoughOptions {
-        params: swarf::strategy::Params { strategy: swarf::strategy::StrategyKind::Offset, ..Default::default() },
-        ..Default::default()
-    };
+    let opts = RoughOptions { strategy: swarf::strategy::Strategy::Offset(Default::default()), ..Default::default() };
     let out = rough(&job, &opts, &mut |_, _| {}).expect("rough");
     let rep = &out.report;
     let (e, p) = (rep.engagement_deg, rep.engagement_pixel_deg);

@@ -26,7 +26,7 @@ fn adaptive_links_stay_low_and_mostly_down() {
 
     // between the first move and the final retract no rapid rises above the approach height
     // over the top of the job (the stock's top is the highest material: the minimum retract)
-    let approach = opts.params.approach;
+    let approach = opts.link.approach;
     let cap = job.top() + approach + 1e-9;
     for (k, m) in moves.iter().enumerate().take(moves.len() - 1).skip(1) {
         assert!(!m.is_rapid() || m.to.z <= cap, "move {k}: rapid to z {} above {cap}", m.to.z);
@@ -36,7 +36,7 @@ fn adaptive_links_stay_low_and_mostly_down() {
     let descents: Vec<_> = moves.iter().filter(|m| m.kind == MoveKind::Descend).collect();
     assert!(!descents.is_empty());
     for m in &descents {
-        assert_eq!(m.feed, job.feed, "descent at {:?}", m.to);
+        assert_eq!(m.feed, job.cutting.feed, "descent at {:?}", m.to);
     }
 
     // lifts off the floor (a rapid up from the level): the links go round the material instead

@@ -5,8 +5,9 @@
 
 use std::path::Path;
 use swarf::job::rough::{RoughOptions, rough};
+use swarf::plan::LinkOptions;
 use swarf::sim::SimOptions;
-use swarf::strategy::{Params, StrategyKind};
+use swarf::strategy::{MedialOptions, Strategy};
 use swarf::toolpath::Motion;
 
 mod common;
@@ -36,7 +37,8 @@ fn medial_programs_are_clean_and_tangent_continuous() {
             }
             let opts = RoughOptions {
                 input_name: name.clone(),
-                params: Params { strategy: StrategyKind::Medial, climb, ..Params::default() },
+                strategy: Strategy::Medial(MedialOptions::DEFAULT),
+                link: LinkOptions { climb, ..LinkOptions::DEFAULT },
                 sim: SimOptions { res: Some(0.1), ..Default::default() },
                 ..Default::default()
             };
@@ -85,7 +87,7 @@ fn a_corner_reads_as_a_turn() {
     use swarf::geom::{DVec2, DVec3};
     use swarf::toolpath::{MoveKind, Toolpath};
     let job = swarf::io::example_job();
-    let mut tp = Toolpath::new(job.tool.clone(), DVec3::new(0.0, 0.0, 1.0), 5.0);
+    let mut tp = Toolpath::new(job.cutting.tool.clone(), DVec3::new(0.0, 0.0, 1.0), 5.0);
     tp.line(MoveKind::Descend, DVec3::new(0.0, 0.0, -1.0), 100.0);
     tp.line(MoveKind::Cut, DVec3::new(10.0, 0.0, -1.0), 100.0);
     // a quarter arc leaving tangentially, then a line at 30° to its end tangent

@@ -13,8 +13,9 @@ use std::time::Instant;
 use swarf::geom::{DVec2, dist_point_segment, ring_area};
 use swarf::job::rough::{RoughOptions, rough};
 use swarf::model::Job;
+use swarf::plan::{LayerGeom, LinkOptions};
 use swarf::sim::SimOptions;
-use swarf::strategy::{LayerGeom, OffsetOrder, Params, StrategyKind};
+use swarf::strategy::{OffsetOrder, Strategy};
 
 // ---------------------------------------------------------------------------------------------
 // random numbers
@@ -64,10 +65,10 @@ fn the_generator_is_deterministic() {
     assert!(v.iter().all(|x| (0.0..1.0).contains(x)));
     let mean = v.iter().sum::<f64>() / v.len() as f64;
     assert!((mean - 0.5).abs() < 0.05, "{mean}");
-    let c1 = pocket_case(1234, StrategyKind::Offset);
-    let c2 = pocket_case(1234, StrategyKind::Offset);
+    let c1 = pocket_case(1234, "offset");
+    let c2 = pocket_case(1234, "offset");
     assert_eq!(c1.json, c2.json);
-    assert_ne!(c1.json, pocket_case(1235, StrategyKind::Offset).json);
+    assert_ne!(c1.json, pocket_case(1235, "offset").json);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -187,7 +188,8 @@ struct Case {
     what: String,
     json: String,
     job: Job,
-    params: Params,
+    strategy: Strategy,
+    link: LinkOptions,
     res: f64,
 }
 
@@ -224,14 +226,20 @@ fn common(rng: &mut Rng, d: f64) -> String {
     s
 }
 
-fn params(rng: &mut Rng, strategy: StrategyKind) -> Params {
-    Params {
-        strategy,
-        climb: rng.chance(0.5),
-        offset_order: if rng.chance(0.5) { OffsetOrder::InsideOut } else { OffsetOrder::OutsideIn },
-        zigzag_angle_deg: if rng.chance(0.5) { 0.0 } else { rng.range(0.0, 180.0).round() },
-        ..Params::default()
+/// The strategy of that name and the linking options, drawn for a case: climb or conventional,
+/// and the offset order and zigzag angle (drawn whatever the strategy, so that every strategy
+/// gets the same cases from a seed).
+fn params(rng: &mut Rng, strategy: &str) -> (Strategy, LinkOptions) {
+    let climb = rng.chance(0.5);
+    let order = if rng.chance(0.5) { OffsetOrder::InsideOut } else { OffsetOrder::OutsideIn };
+    let angle = if rng.chance(0.5) { 0.0 } else { rng.range(0.0, 180.0).round() };
+    let mut s = Strategy::from_name(strategy).unwrap_or_else(|| panic!("no strategy {strategy}"));
+    match &mut s {
+        Strategy::Offset(o) => o.order = order,
+        Strategy::Zigzag(z) => z.angle_deg = angle,
+        _ => {}
     }
+    (s, LinkOptions { climb, ..LinkOptions::DEFAULT })
 }
 
 /// The simulation cell size: the default (D / 100 within [0.02, 0.1]) for the report's
@@ -240,27 +248,27 @@ fn res_for(d: f64) -> f64 {
     (SimOptions::default().res_for(d).max(0.05) * 1000.0).round() / 1000.0
 }
 
-fn finish(seed: u64, what: String, json: String, params: Params, d: f64) -> Case {
+fn finish(seed: u64, what: String, json: String, (strategy, link): (Strategy, LinkOptions), d: f64) -> Case {
     let job = swarf::io::case::parse_case(std::path::Path::new(&format!("prop_{seed}.json")), json.as_bytes())
         .unwrap_or_else(|e| panic!("seed {seed}: the generated case does not parse: {e}\n{json}"));
-    Case { seed, what, json, job, params, res: res_for(d) }
+    Case { seed, what, json, job, strategy, link, res: res_for(d) }
 }
 
 /// A closed pocket 40–120 mm (rounded rectangle, notched rectangle or star polygon) with 0–3
 /// islands (circles, rectangles, convex polygons) that keep 1.5·D + 2 mm from the walls and from
 /// each other, so that the tool passes everywhere with room for a helix.
-fn pocket_case(seed: u64, strategy: StrategyKind) -> Case {
+fn pocket_case(seed: u64, strategy: &str) -> Case {
     pocket_case_scaled(seed, strategy, 1.0)
 }
 
 /// A pocket of [`pocket_case`] at half the size (the same tools): 20–60 mm pockets with 3–12 mm
 /// tools, so that 200 adaptive jobs, simulated finely enough for engagement percentiles, fit in
 /// the test budget.
-fn small_pocket_case(seed: u64, strategy: StrategyKind) -> Case {
+fn small_pocket_case(seed: u64, strategy: &str) -> Case {
     pocket_case_scaled(seed, strategy, 0.5)
 }
 
-fn pocket_case_scaled(seed: u64, strategy: StrategyKind, k: f64) -> Case {
+fn pocket_case_scaled(seed: u64, strategy: &str, k: f64) -> Case {
     let mut rng = Rng::new(seed);
     let d = (rng.range(3.0, 12.0) * 1000.0).round() / 1000.0;
     let angle = if rng.chance(0.5) { 0.0 } else { rng.range(0.0, std::f64::consts::FRAC_PI_2) };
@@ -329,7 +337,7 @@ fn pocket_case_scaled(seed: u64, strategy: StrategyKind, k: f64) -> Case {
 
 /// An open-sided job: a rectangular stock 50–100 mm with a random part (star polygon or
 /// rectangle) inside it or across one of its edges, sometimes a clamp at a corner.
-fn open_case(seed: u64, strategy: StrategyKind) -> Case {
+fn open_case(seed: u64, strategy: &str) -> Case {
     let mut rng = Rng::new(seed ^ 0x5EED_0F0E_u64);
     let d = (rng.range(3.0, 12.0) * 1000.0).round() / 1000.0;
     let (w, h) = (rng.range(50.0, 100.0), rng.range(40.0, 90.0));
@@ -390,32 +398,33 @@ fn open_case(seed: u64, strategy: StrategyKind) -> Case {
 /// the linker accepts (`helix_min_frac · R` plus its margins)?
 fn room_for_helix(case: &Case) -> bool {
     let job = &case.job;
-    let Ok(regions) = job.regions(job.radius(), swarf::strategy::wall_margin(&case.params)) else { return false };
-    let Ok(geom) = LayerGeom::new(job, &regions, &case.params) else { return false };
-    let need = case.params.helix_min_frac * job.radius() + case.params.arc_tol + 0.01;
+    let margin = case.strategy.wall_margin(&case.link);
+    let Ok(regions) = job.regions(job.radius(), margin) else { return false };
+    let Ok(geom) = LayerGeom::new(job, &regions, &case.link, margin) else { return false };
+    let need = case.link.helix_min_frac * job.radius() + case.link.arc_tol + 0.01;
     geom.centres.components().iter().all(|c| !c.offset(-need, 1e-3).is_empty())
 }
 
-fn flags(p: &Params, res: f64) -> String {
-    let mut s = format!("--strategy {}", p.strategy.name());
-    if !p.climb {
+fn flags(strategy: &Strategy, link: &LinkOptions, res: f64) -> String {
+    let mut s = format!("--strategy {}", strategy.name());
+    if !link.climb {
         s.push_str(" --conventional");
     }
-    match p.strategy {
-        StrategyKind::Offset => s.push_str(match p.offset_order {
+    match strategy {
+        Strategy::Offset(o) => s.push_str(match o.order {
             OffsetOrder::InsideOut => " --order inside-out",
             OffsetOrder::OutsideIn => " --order outside-in",
         }),
-        StrategyKind::Zigzag => write!(s, " --angle {}", p.zigzag_angle_deg).unwrap(),
-        StrategyKind::Adaptive | StrategyKind::Medial | StrategyKind::Spiral => {}
+        Strategy::Zigzag(z) => write!(s, " --angle {}", z.angle_deg).unwrap(),
+        _ => {}
     }
     write!(s, " --res {res}").unwrap();
     s
 }
 
 /// The strategies that state an engagement bound.
-fn bounded(s: StrategyKind) -> bool {
-    matches!(s, StrategyKind::Adaptive | StrategyKind::Spiral)
+fn bounded(s: &Strategy) -> bool {
+    matches!(s, Strategy::Adaptive(_) | Strategy::Spiral(_))
 }
 
 /// Marks a problem with the engagement bound (as opposed to gouges, collisions, rest, plunges).
@@ -426,13 +435,14 @@ const BOUND: &str = "bound: ";
 /// Roughs one case and returns its problems (empty when it passes) and a one-line summary.
 fn run(case: &Case) -> (Vec<String>, String) {
     let opts = RoughOptions {
-        params: case.params.clone(),
+        strategy: case.strategy.clone(),
+        link: case.link.clone(),
         // engagement samples every 0.5 mm: the figures checked here (gouges, collisions, rest,
         // plunges) do not depend on them, and the default (res / 2) triples the time
         // (adaptive: every 0.1 mm, since its engagement percentiles are checked)
         sim: SimOptions {
             res: Some(case.res),
-            sample_step: Some(if bounded(case.params.strategy) { 0.1 } else { 0.5 }),
+            sample_step: Some(if bounded(&case.strategy) { 0.1 } else { 0.5 }),
             ..Default::default()
         },
         simulate: true,
@@ -459,7 +469,7 @@ fn run(case: &Case) -> (Vec<String>, String) {
             r.rest_fraction, r.rest_area_mm2, r.reachable_area_mm2, r.rest_volume_mm3
         ));
     }
-    if case.params.strategy == StrategyKind::Medial {
+    if matches!(case.strategy, Strategy::Medial(_)) {
         // the planned path, before its coordinates are rounded to the post's micrometre (a
         // bridge a few tenths of a millimetre long between two small circles then turns by
         // up to a few degrees in print; the example cases check the written program)
@@ -478,7 +488,7 @@ fn run(case: &Case) -> (Vec<String>, String) {
     }
     // the adaptive and spiral strategies' stated bound, outside the entry bores: p99 within the reference
     // + 10°, and under 0.5 % of the cutting time above the reference + 20°
-    if bounded(case.params.strategy) {
+    if bounded(&case.strategy) {
         let e = &r.engagement_deg;
         if !(e.p99 <= r.engagement_ref_deg + 10.0) {
             problems.push(format!(
@@ -509,12 +519,12 @@ fn run(case: &Case) -> (Vec<String>, String) {
     let summary = format!(
         "seed {:>5} {:7} {:.1}s (plan {:.1}s, sim {:.1}s): {} | {} | moves {} rest {:.5} plunges {} entries {} TEA ref {:.0}° p99 {:.0}° max {:.0}°{}",
         case.seed,
-        case.params.strategy.name(),
+        case.strategy.name(),
         t.elapsed().as_secs_f64(),
         r.compute_s,
         r.simulate_s,
         case.what,
-        flags(&case.params, case.res),
+        flags(&case.strategy, &case.link, case.res),
         r.moves.total,
         r.rest_fraction,
         r.plunges,
@@ -539,7 +549,7 @@ fn dump(case: &Case) {
 /// engagement bound included).
 ///
 /// `PROP_SEEDS=2001,2002` runs only those seeds (of the groups that hold them).
-fn run_all(name: &str, seeds: std::ops::Range<u64>, make: fn(u64, StrategyKind) -> Case, strategy: StrategyKind) {
+fn run_all(name: &str, seeds: std::ops::Range<u64>, make: fn(u64, &str) -> Case, strategy: &str) {
     let only: Option<Vec<u64>> =
         std::env::var("PROP_SEEDS").ok().map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect());
     let t = Instant::now();
@@ -560,7 +570,7 @@ fn run_all(name: &str, seeds: std::ops::Range<u64>, make: fn(u64, StrategyKind) 
                 "seed {} ({}), flags {}:\n  {}\n  reproduce: PROP_SEEDS={} cargo test -p swarf --test property\n  case JSON: {}",
                 case.seed,
                 case.what,
-                flags(&case.params, case.res),
+                flags(&case.strategy, &case.link, case.res),
                 problems.join("\n  "),
                 case.seed,
                 case.json
@@ -588,17 +598,17 @@ fn run_all(name: &str, seeds: std::ops::Range<u64>, make: fn(u64, StrategyKind) 
 
 #[test]
 fn random_pockets_offset() {
-    run_all("pockets/offset", 1000..1024, pocket_case, StrategyKind::Offset);
+    run_all("pockets/offset", 1000..1024, pocket_case, "offset");
 }
 
 #[test]
 fn random_pockets_zigzag() {
-    run_all("pockets/zigzag", 2000..2036, pocket_case, StrategyKind::Zigzag);
+    run_all("pockets/zigzag", 2000..2036, pocket_case, "zigzag");
 }
 
 #[test]
 fn random_open_jobs_offset() {
-    run_all("open/offset", 5000..5012, open_case, StrategyKind::Offset);
+    run_all("open/offset", 5000..5012, open_case, "offset");
 }
 
 // Adaptive: 200 closed pockets with islands (seeds 3000..3200), run on every core.
@@ -610,7 +620,7 @@ fn random_open_jobs_offset() {
 
 /// Runs `seeds` of [`small_pocket_case`] with `strategy` on every core: every job must be clean
 /// (and, for the adaptive strategy, within the engagement bound).
-fn parallel(name: &str, seeds: std::ops::Range<u64>, strategy: StrategyKind) {
+fn parallel(name: &str, seeds: std::ops::Range<u64>, strategy: &str) {
     let only: Option<Vec<u64>> =
         std::env::var("PROP_SEEDS").ok().map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect());
     let seeds: Vec<u64> = seeds
@@ -643,7 +653,7 @@ fn parallel(name: &str, seeds: std::ops::Range<u64>, strategy: StrategyKind) {
             "seed {} ({}), flags {}:\n  {}\n  reproduce: PROP_SEEDS={} cargo test -p swarf --test property\n  case JSON: {}",
             c.seed,
             c.what,
-            flags(&c.params, c.res),
+            flags(&c.strategy, &c.link, c.res),
             p.join("\n  "),
             c.seed,
             c.json
@@ -686,7 +696,7 @@ fn parallel(name: &str, seeds: std::ops::Range<u64>, strategy: StrategyKind) {
 
 #[test]
 fn random_pockets_adaptive() {
-    parallel("pockets/adaptive", 3000..3200, StrategyKind::Adaptive);
+    parallel("pockets/adaptive", 3000..3200, "adaptive");
 }
 
 // Medial axis (paper 2): 200 closed pockets with islands (seeds 8000..8201 but 8131, below). Every job must be
@@ -695,7 +705,7 @@ fn random_pockets_adaptive() {
 
 #[test]
 fn random_pockets_medial() {
-    parallel("pockets/medial", 8000..8201, StrategyKind::Medial);
+    parallel("pockets/medial", 8000..8201, "medial");
 }
 
 /// Seed 8131 (a Ø11 tool in a star pocket whose tool-centre region is a polygon 3 mm across)
@@ -705,7 +715,7 @@ fn random_pockets_medial() {
 /// the other 199 and this one is seen to fail the way we know.
 #[test]
 fn random_pocket_medial_known_rest() {
-    let case = small_pocket_case(8131, StrategyKind::Medial);
+    let case = small_pocket_case(8131, "medial");
     let (problems, summary) = run(&case);
     eprintln!("{summary}");
     assert!(problems.len() == 1 && problems[0].starts_with("rest_fraction"), "{problems:?}");
@@ -717,18 +727,18 @@ fn random_pocket_medial_known_rest() {
 
 #[test]
 fn random_pockets_spiral() {
-    parallel("pockets/spiral", 9000..9040, StrategyKind::Spiral);
+    parallel("pockets/spiral", 9000..9040, "spiral");
 }
 
 #[test]
 fn random_open_jobs_adaptive() {
     // (all 16 within the bound)
-    run_all("open/adaptive", 7000..7016, open_case, StrategyKind::Adaptive);
+    run_all("open/adaptive", 7000..7016, open_case, "adaptive");
 }
 
 #[test]
 fn random_open_jobs_zigzag() {
-    run_all("open/zigzag", 6000..6018, open_case, StrategyKind::Zigzag);
+    run_all("open/zigzag", 6000..6018, open_case, "zigzag");
 }
 
 /// The checks above are not vacuous: on a generated pocket, the same simulator finds rest
@@ -741,10 +751,11 @@ fn the_checks_can_fail() {
     use swarf::sim::RasterSim;
     use swarf::toolpath::MoveKind;
     // seed 1000: a pocket with islands
-    let case = pocket_case(1000, StrategyKind::Offset);
+    let case = pocket_case(1000, "offset");
     let job = &case.job;
     let opts = RoughOptions {
-        params: case.params.clone(),
+        strategy: case.strategy.clone(),
+        link: case.link.clone(),
         sim: SimOptions { res: Some(case.res), sample_step: Some(0.5), ..Default::default() },
         ..Default::default()
     };
@@ -755,7 +766,7 @@ fn the_checks_can_fail() {
             && out.report.rapid_collisions == 0
             && out.report.plunges == 0
     );
-    let regions = job.regions(job.radius(), swarf::strategy::wall_margin(&case.params)).expect("regions");
+    let regions = job.regions(job.radius(), case.strategy.wall_margin(&case.link)).expect("regions");
     let sim0 = RasterSim::new(job, &regions, &opts.sim).expect("simulator");
     let z = *job.levels().last().unwrap();
     let safe = out.toolpath.clearance_z;
@@ -786,7 +797,7 @@ fn the_checks_can_fail() {
         .flat_map(|i| (1..20).map(move |j| slo + (shi - slo) * DVec2::new(i as f64, j as f64) / 20.0))
         .find(|p| regions.material.contains(*p) && !grown.contains(*p))
         .expect("a point in the material");
-    let mut tp = swarf::toolpath::Toolpath::new(job.tool.clone(), inside.extend(safe), safe);
+    let mut tp = swarf::toolpath::Toolpath::new(job.cutting.tool.clone(), inside.extend(safe), safe);
     tp.line(MoveKind::Plunge, inside.extend(z), 300.0);
     tp.rapid(DVec3::new(inside.x + 1.0, inside.y, z));
     let mut sim = sim0.clone();

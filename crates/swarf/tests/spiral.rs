@@ -9,8 +9,9 @@
 
 use std::path::Path;
 use swarf::job::rough::{RoughOptions, rough};
+use swarf::plan::LinkOptions;
 use swarf::sim::SimOptions;
-use swarf::strategy::{Params, StrategyKind};
+use swarf::strategy::{SpiralOptions, Strategy};
 use swarf::toolpath::{Motion, MoveKind};
 
 mod common;
@@ -28,7 +29,8 @@ fn spirals_are_clean_smooth_and_in_one_piece() {
         for climb in [true, false] {
             let opts = RoughOptions {
                 input_name: name.into(),
-                params: Params { strategy: StrategyKind::Spiral, climb, ..Params::default() },
+                strategy: Strategy::Spiral(SpiralOptions::DEFAULT),
+                link: LinkOptions { climb, ..LinkOptions::DEFAULT },
                 sim: SimOptions { res: Some(0.1), ..Default::default() },
                 ..Default::default()
             };
@@ -73,7 +75,7 @@ fn spirals_are_clean_smooth_and_in_one_piece() {
             if lines > 2 {
                 bad.push(format!("{what}: {lines} straight cutting moves"));
             }
-            common::check_bound(&what, r, job.width.engagement_deg(), &mut bad);
+            common::check_bound(&what, r, job.cutting.width.engagement_deg(), &mut bad);
         }
     }
     assert!(bad.is_empty(), "{bad:#?}");
@@ -86,14 +88,14 @@ fn pockets_with_islands_get_a_spiral_core_and_adaptive_passes() {
         let job = case(name);
         let opts = RoughOptions {
             input_name: name.into(),
-            params: Params { strategy: StrategyKind::Spiral, ..Params::default() },
+            strategy: Strategy::Spiral(SpiralOptions::DEFAULT),
             sim: SimOptions { res: Some(0.1), ..Default::default() },
             ..Default::default()
         };
         let out = rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
         let r = &out.report;
         common::check_clean(name, r, &mut bad);
-        common::check_bound(name, r, job.width.engagement_deg(), &mut bad);
+        common::check_bound(name, r, job.cutting.width.engagement_deg(), &mut bad);
         // the spiral is there, and says what follows it
         if !out.gcode.contains("spiral over the island-free core") {
             bad.push(format!("{name}: no spiral core in the program"));
@@ -110,12 +112,13 @@ fn pockets_with_islands_get_a_spiral_core_and_adaptive_passes() {
 fn the_optimiser_keeps_the_fastest_feasible_spiral() {
     let job = case("l_pocket.json");
     let opts = RoughOptions {
-        params: Params { strategy: StrategyKind::Spiral, ..Params::default() },
+        strategy: Strategy::Spiral(SpiralOptions::DEFAULT),
         sim: SimOptions { res: Some(0.1), ..Default::default() },
         ..Default::default()
     };
-    let study = swarf::strategy::spiral_search::optimise_spiral_job(&job, &opts.params, &opts.sim)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let study =
+        swarf::strategy::spiral_search::optimise_spiral_job(&job, &SpiralOptions::DEFAULT, &opts.link, &opts.sim)
+            .unwrap_or_else(|e| panic!("{e}"));
     let (choice, trials) = &study;
     let chosen = trials.iter().find(|t| t.choice == *choice).expect("the choice is a trial");
     assert!(chosen.feasible(), "{chosen:?}");

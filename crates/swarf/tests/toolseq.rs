@@ -13,7 +13,7 @@ use swarf::geom::{DVec2, DVec3};
 use swarf::job::toolseq::{Decomposition, SeqOptions};
 use swarf::model::MeshJob;
 use swarf::model::tooldb::{Machine, ToolDb, ToolSpec};
-use swarf::model::{Tool, Width};
+use swarf::model::{Cutting, Width};
 use swarf::toolpath::MoveKind;
 
 fn height(x: f64, y: f64) -> f64 {
@@ -49,12 +49,8 @@ fn cavity() -> MeshJob {
         floor: 0.0,
         allowance: 0.0,
         allowance_floor: 0.0,
-        tool: Tool::flat(6.0),
-        width: Width::Stepover(0.5),
         stepdown: 2.0,
-        feed: 1000.0,
-        rapid_rate: 5000.0,
-        spindle_rpm: 10000.0,
+        cutting: Cutting::with_tool_diameter(6.0).with_width(Width::Stepover(0.5)),
     }
 }
 

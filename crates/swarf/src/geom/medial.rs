@@ -1,5 +1,5 @@
 //! The medial axis of a region: the centres of its maximal inscribed circles, with their radii
-//! (paper 2's [8], MATHSM §2: "the medial axis transform").
+//! (paper 2's \[8\], MATHSM §2: "the medial axis transform").
 //!
 //! It is read off the Voronoi diagram of the region's boundary segments (the `boostvoronoi`
 //! crate, a port of Boost.Polygon's robust sweep over integer input): the primary edges of

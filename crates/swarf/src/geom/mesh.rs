@@ -95,11 +95,14 @@ pub struct Placement {
 
 impl Default for Placement {
     fn default() -> Self {
-        Placement { scale: 1.0, rotate_deg: [0.0; 3], translate: DVec3::ZERO }
+        Placement::IDENTITY
     }
 }
 
 impl Placement {
+    /// The placement that moves nothing.
+    pub const IDENTITY: Placement = Placement { scale: 1.0, rotate_deg: [0.0; 3], translate: DVec3::ZERO };
+
     /// True when it moves nothing.
     pub fn is_identity(&self) -> bool {
         *self == Placement::default()

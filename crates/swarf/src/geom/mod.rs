@@ -8,12 +8,17 @@
 //! come back at the output: [`arcfit`] turns tool-centre polylines into G2/G3 arcs within a
 //! tolerance.
 
+#[doc(hidden)]
 pub mod arcfit;
 pub mod area;
+#[doc(hidden)]
 pub mod biarc;
+#[doc(hidden)]
 pub mod index;
+#[doc(hidden)]
 pub mod medial;
 pub mod mesh;
+#[doc(hidden)]
 pub mod simplify;
 
 pub use area::Area;

@@ -15,6 +15,7 @@
 //!   constant or chosen per level so that successive turns stay within a stepover, ending with
 //!   one turn along the boundary level.
 
+#[doc(hidden)]
 pub mod levels;
 pub mod oscillator;
 pub mod region;

@@ -67,7 +67,7 @@
 
 use super::levels::Grid;
 use super::shape::Field;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Setting};
 use crate::geom::DVec2;
 use crate::geom::index::EdgeIndex;
 
@@ -242,7 +242,7 @@ impl Rhs<'_> {
         let d = self.field.eval(p);
         let gl = d.g.length();
         if !(gl > 1e-300) || !d.v.is_finite() {
-            return Err(Error::param(
+            return Err(Error::job(
                 "spiral",
                 format!(
                     "the gradient of f vanishes at ({:.6}, {:.6}) (f = {}): a flat spot or a second maximum",
@@ -318,12 +318,7 @@ pub fn spiral(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<S
     for _ in 0..5 {
         let s = spiral_once(field, start, opts, gain)?;
         let m = s.max_spacing;
-        if std::env::var("SWARF_DEBUG").is_ok() {
-            eprintln!(
-                "spiral gain {gain:.4}: {:.1} turns, length {:.1}, max spacing {m:.4} (w {w})",
-                s.turns, s.length
-            );
-        }
+        log::debug!("spiral gain {gain:.4}: {:.1} turns, length {:.1}, max spacing {m:.4} (w {w})", s.turns, s.length);
         let ok = m <= opts.accept_gap.unwrap_or(w);
         if ok && best.as_ref().is_none_or(|b| m > b.max_spacing) {
             best = Some(s);
@@ -342,37 +337,37 @@ pub fn spiral(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<S
 }
 
 fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64) -> Result<Spiral> {
-    let (lo, hi) = field.bounds().ok_or_else(|| Error::param("spiral", "the shape is unbounded"))?;
+    let (lo, hi) = field.bounds().ok_or_else(|| Error::job("spiral", "the shape is unbounded"))?;
     let size = (hi - lo).length();
     if !(size > 0.0) || !size.is_finite() {
-        return Err(Error::param("spiral", "the shape has no extent"));
+        return Err(Error::job("spiral", "the shape has no extent"));
     }
     let stepover = match opts.damping {
         Damping::Constant(z) => {
             if !(z > 0.0 && z.is_finite()) {
-                return Err(Error::param("spiral.zeta", format!("ζ must be positive, got {z}")));
+                return Err(Error::setting(Setting::Zeta, format!("ζ must be positive, got {z}")));
             }
             None
         }
         Damping::Stepover { w, safety, zeta_min, zeta_max } => {
             if !(w > 0.0 && w.is_finite()) {
-                return Err(Error::param("spiral.stepover", format!("the stepover must be positive, got {w}")));
+                return Err(Error::setting(
+                    Setting::OscillatorStepover,
+                    format!("the stepover must be positive, got {w}"),
+                ));
             }
             if !(safety > 0.0 && safety <= 1.0 && zeta_min > 0.0 && zeta_min <= zeta_max && zeta_max.is_finite()) {
-                return Err(Error::param("spiral.stepover", "need 0 < safety ≤ 1 and 0 < ζ_min ≤ ζ_max"));
+                return Err(Error::setting(Setting::OscillatorStepover, "need 0 < safety ≤ 1 and 0 < ζ_min ≤ ζ_max"));
             }
             Some(w)
         }
     };
     if !(opts.rtol > 0.0) || opts.atol < 0.0 || opts.max_step < 0.0 || opts.start_offset < 0.0 {
-        return Err(Error::param("spiral", "tolerances, step and start offset must be positive"));
+        return Err(Error::setting(Setting::Oscillator, "tolerances, step and start offset must be positive"));
     }
     let f0 = field.eval(start).v;
     if !(f0 > opts.f_end) {
-        return Err(Error::param(
-            "spiral",
-            format!("f at the start ({f0}) is not above the final level {}", opts.f_end),
-        ));
+        return Err(Error::job("spiral", format!("f at the start ({f0}) is not above the final level {}", opts.f_end)));
     }
     let atol = if opts.atol > 0.0 { opts.atol } else { 1e-7 * size };
     let h_max = if opts.max_step > 0.0 { opts.max_step } else { stepover.map_or(size / 100.0, |w| w / 4.0) };
@@ -396,7 +391,7 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64)
     let mut y = start + DVec2::X * eps;
     let (mut k1, mut fy) = rhs.dir(y, Phase::Grow(zeta_at(f0)))?;
     if !(fy > opts.f_end) {
-        return Err(Error::param("spiral", "the start offset already leaves the region"));
+        return Err(Error::job("spiral", "the start offset already leaves the region"));
     }
     let mut points = vec![SpiralPoint { p: start, f: f0, t: k1 }, SpiralPoint { p: y, f: fy, t: k1 }];
     let mut thetas = vec![0.0, 0.0];
@@ -414,7 +409,7 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64)
     loop {
         steps += 1;
         if steps > opts.max_steps {
-            return Err(Error::param(
+            return Err(Error::job(
                 "spiral",
                 format!(
                     "no end after {} steps (at ({:.6}, {:.6}), f = {fy}, {})",
@@ -426,7 +421,7 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64)
             ));
         }
         if h < h_min {
-            return Err(Error::param("spiral", format!("the step fell below {h_min:e} at ({:.6}, {:.6})", y.x, y.y)));
+            return Err(Error::job("spiral", format!("the step fell below {h_min:e} at ({:.6}, {:.6})", y.x, y.y)));
         }
         let phase = if tracking.is_some() { track } else { Phase::Grow(zeta_at(fy)) };
         let s = dp_step(&mut rhs, y, k1, h, phase)?;
@@ -493,7 +488,7 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64)
                 break;
             }
             if theta < theta0 - std::f64::consts::PI {
-                return Err(Error::param(
+                return Err(Error::job(
                     "spiral",
                     format!(
                         "the spiral met the level f = {} around an island (a hole of the region) at ({:.3}, {:.3}) \
@@ -503,7 +498,7 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64)
                 ));
             }
             if theta > theta0 + 3.0 * std::f64::consts::TAU {
-                return Err(Error::param("spiral", format!("the level f = {} does not close", opts.f_end)));
+                return Err(Error::job("spiral", format!("the level f = {} does not close", opts.f_end)));
             }
         }
         theta += turn;
@@ -515,17 +510,14 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64)
         thetas.push(theta);
         if tracking.is_none() && theta >= last_turn.0 + std::f64::consts::TAU {
             if !(fy < last_turn.1 - 1e-12 * (f0 - opts.f_end).abs()) {
-                return Err(Error::param(
+                return Err(Error::job(
                     "spiral",
                     format!("the spiral stalls at f = {fy}: a whole turn lowered f by nothing (ζ too small?)"),
                 ));
             }
             last_turn = (theta, fy);
             if theta / std::f64::consts::TAU > opts.max_turns as f64 {
-                return Err(Error::param(
-                    "spiral",
-                    format!("more than {} turns before reaching f_end", opts.max_turns),
-                ));
+                return Err(Error::job("spiral", format!("more than {} turns before reaching f_end", opts.max_turns)));
             }
         }
         h = (h * (0.9 * err.max(1e-10).powf(-0.2)).clamp(0.2, 5.0)).min(h_max);
@@ -789,7 +781,7 @@ mod tests {
 
     #[test]
     fn stalls_are_errors() {
-        assert!(matches!(spiral(&Flat, DVec2::ZERO, &SpiralOptions::default()), Err(Error::Param { .. })));
+        assert!(matches!(spiral(&Flat, DVec2::ZERO, &SpiralOptions::default()), Err(Error::Job { .. })));
         // too many turns asked for
         let opts = SpiralOptions { damping: Damping::Constant(0.001), max_turns: 3, ..Default::default() };
         let e = spiral(&disk(10.0), DVec2::ZERO, &opts).unwrap_err();

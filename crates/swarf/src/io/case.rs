@@ -6,11 +6,11 @@
 //! `part[1].holes[0][3]: expected a point [x, y] of two numbers`.
 
 use super::Input;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Setting};
 use crate::geom::area::Fill;
 use crate::geom::mesh::Placement;
 use crate::geom::{Area, DVec2};
-use crate::model::{Job, MeshJob, Tool, Width};
+use crate::model::{Cutting, Job, MeshJob, Tool, Width};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -22,6 +22,14 @@ struct Ctx {
 impl Ctx {
     fn err(&self, place: impl Into<String>, reason: impl Into<String>) -> Error {
         Error::input(&self.file, place, reason)
+    }
+
+    /// A setting error of a value the file gave, as an error of the file at that value's key.
+    fn in_file(&self, e: Error) -> Error {
+        match e {
+            Error::Setting { setting, reason } => self.err(key_of(setting), reason),
+            other => other,
+        }
     }
 
     fn num(&self, v: &Value, place: &str) -> Result<f64> {
@@ -173,8 +181,7 @@ pub fn parse_input(path: &Path, bytes: &[u8]) -> Result<Input> {
         None | Some(Value::Null) => Area::empty(),
         Some(v) => cx.polygons(v, "fixtures")?,
     };
-    let c = common(&cx, &root)?;
-    let Common { diameter, allowance, allowance_floor, width, stepdown, feed, rapid_rate, spindle_rpm } = c;
+    let Common { cutting, allowance, allowance_floor, stepdown } = common(&cx, &root)?;
     let stock_top = cx.opt_num(&root, "stock_top")?.unwrap_or(0.0) * scale;
     let part_top = cx.opt_num(&root, "part_top")?.map_or(stock_top, |v| v * scale);
     let floor = cx.opt_num(&root, "floor")?.ok_or_else(|| cx.err("floor", "missing: the depth to clear to"))? * scale;
@@ -182,39 +189,18 @@ pub fn parse_input(path: &Path, bytes: &[u8]) -> Result<Input> {
         return Err(cx.err("stock", "the stock outline has no area"));
     }
     let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("job").to_string();
-    let mut tool = Tool::flat(diameter);
-    if let Some(n) = tool_number(tool_num_value(&root)) {
-        tool.number = n;
-    }
-    Ok(Input::Flat(Job {
-        name,
-        stock,
-        stock_top,
-        part,
-        part_top,
-        fixtures,
-        floor,
-        allowance,
-        allowance_floor,
-        tool,
-        width,
-        stepdown,
-        feed,
-        rapid_rate,
-        spindle_rpm,
-    }))
+    let job =
+        Job { name, stock, stock_top, part, part_top, fixtures, floor, allowance, allowance_floor, stepdown, cutting };
+    job.validate().map_err(|e| cx.in_file(e))?;
+    Ok(Input::Flat(job))
 }
 
-/// What 2.5D and 3D cases share: the tool, width of cut, allowances, step-down and rates.
+/// What 2.5D and 3D cases share: the cutting data, allowances and step-down.
 struct Common {
-    diameter: f64,
+    cutting: Cutting,
     allowance: f64,
     allowance_floor: f64,
-    width: Width,
     stepdown: Option<f64>,
-    feed: f64,
-    rapid_rate: f64,
-    spindle_rpm: f64,
 }
 
 fn common(cx: &Ctx, root: &Value) -> Result<Common> {
@@ -229,31 +215,29 @@ fn common(cx: &Ctx, root: &Value) -> Result<Common> {
         cx.num(tool.get("diameter").ok_or_else(|| cx.err("tool.diameter", "missing"))?, "tool.diameter")? * scale;
     let allowance = cx.opt_num(root, "allowance")?.unwrap_or(0.0) * scale;
     let allowance_floor = cx.opt_num(root, "allowance_floor")?.map_or(allowance, |v| v * scale);
+    let d = Cutting::DEFAULT;
     let width = match (cx.opt_num(root, "engagement_deg")?, cx.opt_num(root, "stepover")?) {
         (Some(t), _) => Width::EngagementDeg(t),
         (None, Some(s)) => Width::Stepover(s),
-        (None, None) => Width::Stepover(0.4),
+        (None, None) => d.width,
     };
-    let which = if matches!(width, Width::EngagementDeg(_)) { "engagement_deg" } else { "stepover" };
-    width.validate(which).map_err(|e| match e {
-        Error::Param { place, reason } => cx.err(place, reason),
-        other => other,
-    })?;
     let stepdown = cx.opt_num(root, "stepdown")?.map(|v| v * scale);
-    let feed = cx.opt_num(root, "feed_default")?.unwrap_or(1000.0) * scale;
-    let rapid_rate = cx.opt_num(root, "rapid_rate")?.unwrap_or(5000.0) * scale;
-    let spindle_rpm = cx.opt_num(root, "spindle_rpm")?.unwrap_or(10000.0);
-    for (key, v) in [("spindle_rpm", spindle_rpm), ("feed_default", feed), ("rapid_rate", rapid_rate)] {
-        if v.is_nan() || v <= 0.0 {
-            return Err(cx.err(key, format!("{v}: must be a positive number")));
-        }
+    let feed = cx.opt_num(root, "feed_default")?.map_or(d.feed, |v| v * scale);
+    let rapid_rate = cx.opt_num(root, "rapid_rate")?.map_or(d.rapid_rate, |v| v * scale);
+    let spindle_rpm = cx.opt_num(root, "spindle_rpm")?.unwrap_or(d.spindle_rpm);
+    let mut tool = Tool::flat(diameter);
+    if let Some(n) = tool_number(tool_num_value(root)) {
+        tool.number = n;
     }
+    let cutting = Cutting { tool, width, feed, rapid_rate, spindle_rpm };
+    // (each value where the file gives it: a bad one is the file's error, named by its key)
+    cutting.validate().map_err(|e| cx.in_file(e))?;
     if let Some(sd) = stepdown
-        && (sd.is_nan() || sd <= 0.0)
+        && !(sd.is_finite() && sd > 0.0)
     {
         return Err(cx.err("stepdown", format!("{sd} mm: the step-down must be positive")));
     }
-    Ok(Common { diameter, allowance, allowance_floor, width, stepdown, feed, rapid_rate, spindle_rpm })
+    Ok(Common { cutting, allowance, allowance_floor, stepdown })
 }
 
 /// A 3D case: `stock_box` [xmin, ymin, zmin, xmax, ymax, zmax], `part_stl` (relative to the
@@ -315,26 +299,36 @@ fn mesh_case(cx: &Ctx, root: &Value, path: &Path) -> Result<MeshJob> {
     if floor >= hi.z {
         return Err(cx.err("floor", format!("{floor} mm: must be below the stock top {}", hi.z)));
     }
-    let mut tool = Tool::flat(c.diameter);
-    if let Some(n) = tool_number(tool_num_value(root)) {
-        tool.number = n;
+    let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("job");
+    let mut job = MeshJob::new(name, mesh, lo, hi, c.cutting);
+    job.floor = floor.max(lo.z);
+    job.allowance = c.allowance;
+    job.allowance_floor = c.allowance_floor;
+    if let Some(sd) = c.stepdown {
+        job.stepdown = sd;
     }
-    let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("job").to_string();
-    Ok(MeshJob {
-        name,
-        mesh,
-        stock_lo: lo,
-        stock_hi: hi,
-        floor: floor.max(lo.z),
-        allowance: c.allowance,
-        allowance_floor: c.allowance_floor,
-        width: c.width,
-        stepdown: c.stepdown.unwrap_or(c.diameter / 2.0),
-        tool,
-        feed: c.feed,
-        rapid_rate: c.rapid_rate,
-        spindle_rpm: c.spindle_rpm,
-    })
+    job.validate().map_err(|e| cx.in_file(e))?;
+    Ok(job)
+}
+
+/// The key of a case file that holds a setting.
+fn key_of(setting: Setting) -> &'static str {
+    match setting {
+        Setting::ToolDiameter => "tool.diameter",
+        Setting::Stepover => "stepover",
+        Setting::Engagement => "engagement_deg",
+        Setting::Feed => "feed_default",
+        Setting::RapidRate => "rapid_rate",
+        Setting::SpindleSpeed => "spindle_rpm",
+        Setting::Stepdown => "stepdown",
+        Setting::Floor => "floor",
+        Setting::StockTop => "stock_top",
+        Setting::PartTop => "part_top",
+        Setting::Allowance => "allowance",
+        Setting::AllowanceFloor => "allowance_floor",
+        Setting::StockBox => "stock_box",
+        other => other.name(),
+    }
 }
 
 fn tool_num_value(root: &Value) -> Option<&Value> {
@@ -361,10 +355,10 @@ mod tests {
             "floor":-5,"engagement_deg":90}"#,
         )
         .unwrap();
-        assert_eq!(j.tool.diameter, 6.0);
+        assert_eq!(j.cutting.tool.diameter, 6.0);
         assert!((j.stock.area() - 1200.0).abs() < 1e-9);
         assert!((j.part.area() - (76.0 * 36.0 - 1200.0)).abs() < 1e-6);
-        assert!((j.width.stepover() - 0.5).abs() < 1e-12);
+        assert!((j.cutting.width.stepover() - 0.5).abs() < 1e-12);
         assert_eq!(j.levels(), vec![-5.0]);
     }
 

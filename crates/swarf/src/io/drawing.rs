@@ -7,10 +7,10 @@
 //! (the even-odd rule), everything outside being part material.
 
 use super::Overrides;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Setting};
 use crate::geom::area::Fill;
 use crate::geom::{Area, DVec2};
-use crate::model::{Job, Width};
+use crate::model::{Job, Tool};
 use swarf_import::{Drawing, Role};
 
 /// Chord tolerance for flattening the drawing's arcs into region polygons (mm).
@@ -26,8 +26,10 @@ fn area_of(d: &Drawing, pick: impl Fn(Role) -> bool) -> Area {
     Area::from_rings(&rings, Fill::EvenOdd)
 }
 
-/// Builds a job from a drawing and the user's options (tool 6 mm, stepover 40 %, depth 3 mm
-/// unless given).
+/// Builds a job from a drawing and the user's options: [`Overrides::DEFAULT_DEPTH`] deep with the
+/// default cutting data ([`crate::model::Cutting::DEFAULT`]) unless they say otherwise (the
+/// overrides of the cutting data are applied by [`super::load_input`]; the tool diameter is read
+/// here too, for the margin of the stock round a part).
 pub fn job_from_drawing(d: &Drawing, ov: &Overrides) -> Result<Job> {
     let file = &d.path;
     if d.shapes.is_empty() {
@@ -35,7 +37,7 @@ pub fn job_from_drawing(d: &Drawing, ov: &Overrides) -> Result<Job> {
     }
     let has = |r: Role| d.shapes.iter().any(|s| s.role == r);
     let fixtures = area_of(d, |r| r == Role::Fixture);
-    let tool_d = ov.tool_diameter.unwrap_or(6.0);
+    let tool_d = ov.tool_diameter.unwrap_or(Tool::DEFAULT.diameter);
     let (stock, part) = if has(Role::Stock) {
         (area_of(d, |r| r == Role::Stock), area_of(d, |r| r == Role::Part || r == Role::Auto))
     } else if has(Role::Part) {
@@ -53,10 +55,10 @@ pub fn job_from_drawing(d: &Drawing, ov: &Overrides) -> Result<Job> {
     if stock.is_empty() {
         return Err(Error::input(file, "STOCK layer", "the stock contours enclose no area"));
     }
-    let depth = ov.depth.unwrap_or(3.0);
+    let depth = ov.depth.unwrap_or(Overrides::DEFAULT_DEPTH);
     if !(depth.is_finite() && depth > 0.0) {
-        return Err(Error::param("--depth", format!("{depth} mm: the depth must be positive")));
+        return Err(Error::setting(Setting::Depth, format!("{depth} mm: the depth must be positive")));
     }
     let name = file.file_stem().and_then(|s| s.to_str()).unwrap_or("drawing").to_string();
-    Ok(Job { fixtures, width: ov.width.unwrap_or(Width::Stepover(0.4)), ..Job::new(name, stock, part, tool_d, depth) })
+    Ok(Job { fixtures, ..Job::new(name, stock, part, tool_d, depth) })
 }

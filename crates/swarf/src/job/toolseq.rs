@@ -39,7 +39,7 @@
 //! tool change. The time and cost of a tool are those of the program that is written (eq. 3's
 //! `l_mc` is every feed move, `l_air` every rapid).
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Setting};
 use crate::geom::{Area, DVec2, DVec3, segments_intersect};
 use crate::model::tooldb::{Cost, ToolDb, ToolRun, ToolSpec};
 use crate::model::{MeshJob, REGION_TOL, Tool};
@@ -59,7 +59,7 @@ pub enum Decomposition {
 }
 
 /// Options of the search.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct SeqOptions {
     /// Cavity decomposition.
     pub decomposition: Decomposition,
@@ -71,9 +71,33 @@ pub struct SeqOptions {
     pub clearance: f64,
 }
 
+impl SeqOptions {
+    /// Algorithm 4 (trimmed paths), the bounded search, 3° ramps, a clearance plane 2 mm above
+    /// the job.
+    pub const DEFAULT: SeqOptions =
+        SeqOptions { decomposition: Decomposition::Trim, prune: true, ramp_deg: 3.0, clearance: 2.0 };
+
+    /// Checks the ramp angle (in (0°, 90°)) and the clearance (zero or more).
+    pub fn validate(&self) -> Result<()> {
+        if !(self.ramp_deg.is_finite() && self.ramp_deg > 0.0 && self.ramp_deg < 90.0) {
+            return Err(Error::setting(
+                Setting::SeqRampAngle,
+                format!("{}°: must be between 0° and 90°", self.ramp_deg),
+            ));
+        }
+        if !(self.clearance.is_finite() && self.clearance >= 0.0) {
+            return Err(Error::setting(
+                Setting::SeqClearance,
+                format!("{} mm: must be zero or positive", self.clearance),
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl Default for SeqOptions {
     fn default() -> Self {
-        SeqOptions { decomposition: Decomposition::Trim, prune: true, ramp_deg: 3.0, clearance: 2.0 }
+        SeqOptions::DEFAULT
     }
 }
 
@@ -164,8 +188,8 @@ impl RestMaps {
     pub fn png(&self, i: usize) -> Result<Vec<u8>> {
         let g = self.grid;
         let (w, h) = (g.nx as u32, g.ny as u32);
-        let mut pix =
-            resvg::tiny_skia::Pixmap::new(w.max(1), h.max(1)).ok_or_else(|| Error::param("plot", "empty picture"))?;
+        let mut pix = resvg::tiny_skia::Pixmap::new(w.max(1), h.max(1))
+            .ok_or_else(|| Error::Output { what: "picture".into(), reason: "it is empty".into() })?;
         let span = (self.top - self.bottom).max(1e-9);
         let data = pix.data_mut();
         for j in 0..g.ny {
@@ -184,7 +208,8 @@ impl RestMaps {
                 data[o + 3] = 255;
             }
         }
-        pix.encode_png().map_err(|e| Error::param("plot", format!("cannot encode PNG: {e}")))
+        pix.encode_png()
+            .map_err(|e| Error::Output { what: "picture".into(), reason: format!("cannot encode the PNG: {e}") })
     }
 }
 
@@ -201,7 +226,7 @@ pub const MAX_TOOLS: usize = 20;
 /// Points of a path are this far apart at most when trimmed (mm).
 const SAMPLE: f64 = 0.5;
 /// The tool disk is grown by this when it is asked whether it meets material (mm): more than
-/// the sagitta of a [`SAMPLE`] chord on the smallest disk, so a path between two samples in air
+/// the sagitta of a `SAMPLE` chord on the smallest disk, so a path between two samples in air
 /// is in air.
 pub const NEED_MARGIN: f64 = 0.05;
 /// Tool centres keep this much more than the radius from the part (mm).
@@ -273,10 +298,26 @@ struct Prepared {
 
 /// Finds the cheapest tool sequence for `job` with the tools of `db` (the job's own tool,
 /// step-down and feed are not used), and the programs of that sequence.
+///
+/// ```
+/// use swarf::model::tooldb::ToolDb;
+/// use swarf::{Input, Overrides, SeqOptions, load_input, plan_tools};
+/// let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+/// let case = format!("{root}/examples/3d/bowl_cavity.json");
+/// let Input::Mesh(job) = load_input(case.as_ref(), &Overrides::DEFAULT)? else { unreachable!() };
+/// let db = ToolDb::read(format!("{root}/examples/tools/table1.json").as_ref())?;
+/// let plan = plan_tools(&job, &db, &SeqOptions::DEFAULT)?;
+/// let best = plan.best();
+/// // one program per tool of the cheapest sequence, biggest first
+/// assert_eq!(plan.programs.len(), best.tools.len());
+/// assert!(best.diameters.windows(2).all(|w| w[0] >= w[1]));
+/// # Ok::<(), swarf::Error>(())
+/// ```
 pub fn plan(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<SeqPlan> {
     let t0 = Instant::now();
     let prep = prepare(job, db, opts)?;
     let prepare_s = t0.elapsed().as_secs_f64();
+    log::info!("{} tools prepared in {prepare_s:.2} s", prep.tools.len());
     let t1 = Instant::now();
     let mut search =
         Search { prep: &prep, memo: HashMap::new(), mats: Materials::default(), done: Vec::new(), best: f64::INFINITY };
@@ -301,7 +342,7 @@ pub fn plan(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<SeqPlan> {
     let evaluations = search.memo.len();
     let mut sequences = search.done;
     sequences.sort_by(|a, b| a.cost.total_cost.total_cmp(&b.cost.total_cost).then_with(|| a.index.cmp(&b.index)));
-    let best = sequences.first().ok_or_else(|| Error::param("tools", "no sequence could be costed"))?;
+    let best = sequences.first().ok_or_else(|| Error::job("tools", "no sequence could be costed"))?;
     let programs = best
         .index
         .iter()
@@ -332,7 +373,7 @@ pub fn cost_of(job: &MeshJob, db: &ToolDb, seq: &[usize], opts: &SeqOptions) -> 
         .iter()
         .map(|&i| prep.tools.iter().position(|t| t.number as usize == i + 1))
         .collect::<Option<_>>()
-        .ok_or_else(|| Error::param("tools", "a tool index is out of range"))?;
+        .ok_or_else(|| Error::job("tools", "a tool index is out of range"))?;
     let mut mats = Materials::default();
     let runs: Vec<ToolRun> = order
         .iter()
@@ -495,11 +536,12 @@ fn rest_maps(job: &MeshJob, prep: &Prepared, seq: &[usize]) -> RestMaps {
 /// Reads the levels, shadows, regions and loops of every tool.
 fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<Prepared> {
     job.validate()?;
+    opts.validate()?;
     if db.tools.is_empty() {
-        return Err(Error::param("tools", "the tool database has no tools"));
+        return Err(Error::job("tools", "the tool database has no tools"));
     }
     if db.tools.len() > MAX_TOOLS {
-        return Err(Error::param(
+        return Err(Error::job(
             "tools",
             format!(
                 "{} tools: the search covers every subset of them (2^{} sequences); at most {MAX_TOOLS}",
@@ -507,9 +549,6 @@ fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<Prepared> {
                 db.tools.len() - 1
             ),
         ));
-    }
-    if !(opts.ramp_deg.is_finite() && opts.ramp_deg > 0.0 && opts.ramp_deg < 90.0) {
-        return Err(Error::param("ramp", format!("{}°: must be between 0 and 90", opts.ramp_deg)));
     }
     // biggest first; equal diameters in the file's order
     let mut order: Vec<usize> = (0..db.tools.len()).collect();
@@ -519,7 +558,6 @@ fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<Prepared> {
     let mut zs: Vec<f64> = tool_levels.iter().flatten().copied().collect();
     zs.sort_by(|a, b| b.total_cmp(a));
     zs.dedup();
-    let debug = std::env::var("SWARF_DEBUG").is_ok();
     let t0 = Instant::now();
     let mut shadows = crate::geom::mesh::Shadows::new(&job.mesh);
     let keeps: Vec<Area> = zs
@@ -529,21 +567,17 @@ fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<Prepared> {
             let sh = shadows.down_to(z - job.allowance_floor);
             let tb = ta.elapsed().as_secs_f64();
             let k = crate::model::keep_of(sh, job.allowance);
-            if debug {
-                eprintln!(
-                    "toolseq: shadow z {z:.3} {} vertices {} rings {} polys, {tb:.3} s, keep {:.3} s",
-                    sh.vertex_count(),
-                    sh.rings().count(),
-                    sh.polys.len(),
-                    ta.elapsed().as_secs_f64() - tb
-                );
-            }
+            log::trace!(
+                "toolseq: shadow z {z:.3} {} vertices {} rings {} polys, {tb:.3} s, keep {:.3} s",
+                sh.vertex_count(),
+                sh.rings().count(),
+                sh.polys.len(),
+                ta.elapsed().as_secs_f64() - tb
+            );
             k
         })
         .collect();
-    if debug {
-        eprintln!("toolseq: {} levels, shadows in {:.2} s", zs.len(), t0.elapsed().as_secs_f64());
-    }
+    log::debug!("toolseq: {} levels, shadows in {:.2} s", zs.len(), t0.elapsed().as_secs_f64());
     let bands: Vec<Area> = keeps.par_iter().map(|k| k.offset(WALL_MARGIN + 0.03, REGION_TOL)).collect();
     let stock = job.stock_area();
     let keep_at = |z: f64| zs.iter().position(|&w| w == z).expect("a level of some tool");
@@ -569,18 +603,16 @@ fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<Prepared> {
             let access = centres.offset(r - 0.01, REGION_TOL);
             let tc = Instant::now();
             let chains = chains_of(&centres, spec.width_of_cut.min(spec.diameter / 2.0));
-            if debug {
-                eprintln!(
-                    "toolseq: D{} z {:.3}: centres {:.3} s ({} vertices), access {:.3} s, {} chains {:.3} s",
-                    spec.diameter,
-                    tool_levels[t][l],
-                    (tb - ta).as_secs_f64(),
-                    centres.vertex_count(),
-                    (tc - tb).as_secs_f64(),
-                    chains.len(),
-                    tc.elapsed().as_secs_f64()
-                );
-            }
+            log::trace!(
+                "toolseq: D{} z {:.3}: centres {:.3} s ({} vertices), access {:.3} s, {} chains {:.3} s",
+                spec.diameter,
+                tool_levels[t][l],
+                (tb - ta).as_secs_f64(),
+                centres.vertex_count(),
+                (tc - tb).as_secs_f64(),
+                chains.len(),
+                tc.elapsed().as_secs_f64()
+            );
             Some((centres, access, chains))
         })
         .collect();
@@ -961,15 +993,13 @@ fn run_tool(prep: &Prepared, k: usize, prefix: &[usize], mats: &[Area]) -> (Tool
         tp.rapid(DVec3::new(end.x, end.y, prep.clear_z));
     }
     let t = tp.totals(prep.machine.rapid_feed_mm_min);
-    if std::env::var("SWARF_DEBUG").is_ok() {
-        eprintln!(
-            "toolseq: {} after {:?}: levels {t_cut:.3} s, program {:.3} s, {} moves",
-            tg.spec.id,
-            prefix.iter().map(|&i| prep.tools[i].spec.id.as_str()).collect::<Vec<_>>(),
-            t0.elapsed().as_secs_f64() - t_cut,
-            tp.moves.len()
-        );
-    }
+    log::debug!(
+        "toolseq: {} after {:?}: levels {t_cut:.3} s, program {:.3} s, {} moves",
+        tg.spec.id,
+        prefix.iter().map(|&i| prep.tools[i].spec.id.as_str()).collect::<Vec<_>>(),
+        t0.elapsed().as_secs_f64() - t_cut,
+        tp.moves.len()
+    );
     let run = ToolRun {
         cut_mm: t.cut_length_mm,
         air_mm: t.rapid_length_mm,

@@ -18,8 +18,8 @@
 //! the part's surface from the mesh ([`crate::sim::heights::height_map`]), so a gouge anywhere on the
 //! surface is found.
 
-use super::rough::{About, RoughOptions, RoughResult, Stage, finish, validate_params};
-use crate::error::{Error, Result};
+use super::rough::{About, RoughOptions, RoughResult, Stage, finish};
+use crate::error::{Error, Result, Setting};
 use crate::geom::DVec3;
 use crate::model::{MeshJob, keep_of};
 use crate::post;
@@ -40,44 +40,47 @@ fn cut_all(sim: &mut RasterSim, tp: &Toolpath) {
 /// Plans the z-level program of `job` (no posting, no simulation).
 pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -> Result<(Toolpath, Vec<f64>)> {
     job.validate()?;
-    validate_params(&opts.params)?;
-    let debug = std::env::var("SWARF_DEBUG").is_ok();
+    opts.validate()?;
     let t0 = Instant::now();
     let zs = job.levels();
     let mut shadows = crate::geom::mesh::Shadows::new(&job.mesh);
     let mut state = crate::sim::heights::mesh_model(job, &opts.sim)?;
-    let safe_z = job.top() + opts.params.clearance;
+    let safe_z = job.top() + opts.link.clearance;
     let mut out: Option<Toolpath> = None;
     let mut done = Vec::new();
     for (i, &z) in zs.iter().enumerate() {
         progress(i as f64 / zs.len() as f64);
+        log::info!("z-level {} of {}: z {z:.3}", i + 1, zs.len());
         let ts = Instant::now();
         let shadow = shadows.down_to(z - job.allowance_floor);
         let t_shadow = ts.elapsed().as_secs_f64();
         let keep = keep_of(shadow, job.allowance);
-        if debug {
-            eprintln!(
-                "shadow at z {z:.3}: {} vertices in {t_shadow:.3} s, keep {} vertices ({} rings) in {:.3} s",
-                shadow.vertex_count(),
-                keep.vertex_count(),
-                keep.rings().count(),
-                ts.elapsed().as_secs_f64() - t_shadow
-            );
-        }
+        log::trace!(
+            "shadow at z {z:.3}: {} vertices in {t_shadow:.3} s, keep {} vertices ({} rings) in {:.3} s",
+            shadow.vertex_count(),
+            keep.vertex_count(),
+            keep.rings().count(),
+            ts.elapsed().as_secs_f64() - t_shadow
+        );
         let lj = job.level_job(&keep, z);
         // the level is planned on what the levels above left
         let heights = HeightMap { grid: state.grid, stock: state.heights().to_vec(), part: None };
-        let lopts = RoughOptions {
+        let mut lopts = RoughOptions {
             // (rapids at depth cross whole levels of cleared stock: checked against the
             // surely cut heights)
             sim: SimOptions { heights: Some(Arc::new(heights)), sure_links: true, ..opts.sim.clone() },
-            params: crate::plan::Params { corner_fillets: false, full_wall_contour: true, ..opts.params.clone() },
             ..opts.clone()
         };
+        if let Some(a) = lopts.strategy.adaptive_mut() {
+            // (the slivers the fillets and a cell-sized model leave stack into walls a whole
+            // depth tall over the levels)
+            a.corner_fillets = false;
+            a.full_wall_contour = true;
+        }
         let planned = match super::rough::plan(&lj, &lopts) {
             Ok(p) => p,
             // a level with nothing the tool can reach
-            Err(Error::Param { .. }) if lj.regions(job.radius(), 0.0).map_or(true, |r| r.reachable.is_empty()) => None,
+            Err(Error::Job { .. }) if lj.regions(job.radius(), 0.0).map_or(true, |r| r.reachable.is_empty()) => None,
             Err(e) => return Err(e),
         };
         let Some(p) = planned else { continue };
@@ -85,15 +88,13 @@ pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -
         // (each level's program ends with its retract to the safe height, where the next
         // level's travel starts)
         tp.notes.retain(|n| !n.text.starts_with("level ") && !n.text.starts_with("end:"));
-        if debug {
-            eprintln!(
-                "z-level {} of {} at z {z:.3}: {} moves, {:.2} s",
-                i + 1,
-                zs.len(),
-                tp.moves.len(),
-                t0.elapsed().as_secs_f64()
-            );
-        }
+        log::debug!(
+            "z-level {} of {} at z {z:.3}: {} moves, {:.2} s",
+            i + 1,
+            zs.len(),
+            tp.moves.len(),
+            t0.elapsed().as_secs_f64()
+        );
         if tp.moves.iter().all(|m| m.is_rapid()) {
             continue;
         }
@@ -101,7 +102,7 @@ pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -
         done.push(z);
         match &mut out {
             None => {
-                let mut first = Toolpath::new(job.tool.clone(), tp.start, safe_z);
+                let mut first = Toolpath::new(job.cutting.tool.clone(), tp.start, safe_z);
                 first.note(format!("z-level {}: z {z:.3}", done.len()));
                 append(&mut first, tp, safe_z);
                 out = Some(first);
@@ -114,7 +115,7 @@ pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -
     }
     progress(1.0);
     let mut tp = out.ok_or_else(|| {
-        Error::param("stock_box", "nothing to cut: the part fills the stock, or the tool reaches no material")
+        Error::job("stock_box", "nothing to cut: the part fills the stock, or the tool reaches no material")
     })?;
     let end = tp.end();
     if end.z < safe_z - 1e-9 {
@@ -143,27 +144,33 @@ fn append(all: &mut Toolpath, tp: Toolpath, safe_z: f64) {
     all.moves.extend(tp.moves);
 }
 
-/// Roughs a mesh job: plans, posts and (optionally) simulates it for the report.
+/// Roughs a mesh job: plans, posts and (optionally) simulates it for the report. Each level is
+/// planned with `opts.strategy` on the stock the levels above left.
+///
+/// ```
+/// use swarf::{Input, Overrides, RoughOptions, load_input, rough_mesh};
+/// let case = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/3d/bowl_cavity.json");
+/// let Input::Mesh(job) = load_input(case.as_ref(), &Overrides::DEFAULT)? else { unreachable!() };
+/// let opts = RoughOptions { simulate: false, ..RoughOptions::DEFAULT };
+/// let out = rough_mesh(&job, &opts, &mut |_, _| {})?;
+/// assert!(out.report.levels.len() > 1 && out.gcode.contains("z-level roughing"));
+/// # Ok::<(), swarf::Error>(())
+/// ```
 pub fn rough(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64)) -> Result<RoughResult> {
     if opts.sim.engine != crate::sim::SimEngine::Raster && opts.simulate {
-        return Err(Error::param("--sim", "the distance-field simulator handles 2.5D jobs only; use --sim raster"));
+        return Err(Error::setting(
+            Setting::SimEngine,
+            "the distance-field simulator handles 2.5D jobs only; use the raster simulator",
+        ));
     }
     let t0 = Instant::now();
     progress(Stage::Plan, 0.0);
     let (mut toolpath, zs) = plan(job, opts, &mut |f| progress(Stage::Plan, f))?;
     toolpath.quantize(post::COORD_STEP, post::CENTER_STEP);
     let compute_s = t0.elapsed().as_secs_f64();
+    log::info!("{}: {} levels planned in {compute_s:.2} s, {} moves", job.name, zs.len(), toolpath.moves.len());
     progress(Stage::Plan, 1.0);
-    let about = About {
-        name: &job.name,
-        what: "z-level roughing, ",
-        tool_diameter: job.tool.diameter,
-        width: job.width,
-        floor: job.floor,
-        feed: job.feed,
-        spindle_rpm: job.spindle_rpm,
-        rapid_rate: job.rapid_rate,
-    };
+    let about = About { name: &job.name, what: "z-level roughing, ", cutting: &job.cutting, floor: job.floor };
     finish(toolpath, zs, &about, opts, compute_s, progress, |tp, progress| {
         let mut sim = crate::sim::heights::mesh_model(job, &opts.sim)?;
         let mut rp = sim.replay(tp, &mut |f| progress(Stage::Simulate, f));

@@ -1,6 +1,8 @@
-//! The cutting data jobs share: the tool and the width of cut.
+//! The cutting data every job carries (a 2.5D job and a mesh job alike): the tool, the width of
+//! cut, the feed, the spindle speed and the rapid rate of the time estimates, with swarf's
+//! defaults for what an input does not say ([`Cutting::DEFAULT`]).
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Setting};
 
 /// A flat end mill.
 #[derive(Debug, Clone, PartialEq)]
@@ -14,13 +16,27 @@ pub struct Tool {
 }
 
 impl Tool {
-    /// A flat end mill of the given diameter, tool number 1.
-    pub fn flat(diameter: f64) -> Tool {
+    /// The tool of a job that names none: a Ø6 mm two-flute flat end mill, `T1`.
+    pub const DEFAULT: Tool = Tool::flat(6.0);
+
+    /// A two-flute flat end mill of the given diameter, tool number 1.
+    pub const fn flat(diameter: f64) -> Tool {
         Tool { diameter, number: 1, flutes: 2 }
     }
     /// Radius, mm.
     pub fn radius(&self) -> f64 {
         self.diameter / 2.0
+    }
+    /// Checks the diameter: a positive number.
+    pub fn validate(&self) -> Result<()> {
+        let d = self.diameter;
+        if !(d.is_finite() && d > 0.0) {
+            return Err(Error::setting(
+                Setting::ToolDiameter,
+                format!("{d} mm: the tool diameter must be a positive number"),
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -34,6 +50,10 @@ pub enum Width {
 }
 
 impl Width {
+    /// The width of cut of a job that names none: 40 % of the diameter (78.5° in a straight
+    /// cut).
+    pub const DEFAULT: Width = Width::Stepover(0.4);
+
     /// Stepover fraction of a straight cut with this width: `s = (1 - cos θ) / 2`, the inverse of
     /// paper 1 eq. 3, `θ = 90° + asin(2s − 1)`.
     pub fn stepover(self) -> f64 {
@@ -49,28 +69,102 @@ impl Width {
             Width::Stepover(s) => 90.0 + (2.0 * s - 1.0).clamp(-1.0, 1.0).asin().to_degrees(),
         }
     }
-    /// Checks the range.
-    pub fn validate(self, place: &str) -> Result<()> {
+    /// Checks the range: a stepover in (0, 1], an engagement in (0°, 180°].
+    pub fn validate(self) -> Result<()> {
         match self {
-            Width::Stepover(s) if !(s > 0.0 && s <= 1.0) => {
-                Err(Error::param(place, format!("{s} is outside (0, 1] (a fraction of the tool diameter)")))
-            }
+            Width::Stepover(s) if !(s > 0.0 && s <= 1.0) => Err(Error::setting(
+                Setting::Stepover,
+                format!("stepover {s} is outside (0, 1] (a fraction of the tool diameter)"),
+            )),
             Width::EngagementDeg(t) if !(t > 0.0 && t <= 180.0) => {
-                Err(Error::param(place, format!("{t}° is outside (0°, 180°]")))
+                Err(Error::setting(Setting::Engagement, format!("engagement {t}° is outside (0°, 180°]")))
             }
             _ => Ok(()),
         }
     }
 }
 
-/// Checks a tool's diameter and a width of cut (a 2.5D job's and a mesh job's alike).
-pub(crate) fn check_tool_and_width(tool: &Tool, width: Width) -> Result<()> {
-    let d = tool.diameter;
-    if !(d.is_finite() && d > 0.0) {
-        return Err(Error::param("tool diameter", format!("{d} mm: the tool diameter must be a positive number")));
+/// The tool, the width of cut and the rates a job is cut with.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cutting {
+    /// The tool.
+    pub tool: Tool,
+    /// Width of cut.
+    pub width: Width,
+    /// Cutting feed, mm/min.
+    pub feed: f64,
+    /// Rapid rate for the time estimates, mm/min.
+    pub rapid_rate: f64,
+    /// Spindle speed, rpm.
+    pub spindle_rpm: f64,
+}
+
+impl Cutting {
+    /// swarf's cutting data for what an input does not say: [`Tool::DEFAULT`] (Ø6 mm),
+    /// [`Width::DEFAULT`] (40 %), 1000 mm/min feed, 5000 mm/min rapids for the time estimates,
+    /// 10 000 rpm.
+    pub const DEFAULT: Cutting =
+        Cutting { tool: Tool::DEFAULT, width: Width::DEFAULT, feed: 1000.0, rapid_rate: 5000.0, spindle_rpm: 10000.0 };
+
+    /// The default cutting data with a flat end mill of `diameter`.
+    pub const fn with_tool_diameter(diameter: f64) -> Cutting {
+        Cutting { tool: Tool::flat(diameter), ..Cutting::DEFAULT }
     }
-    width.validate(match width {
-        Width::Stepover(_) => "stepover",
-        Width::EngagementDeg(_) => "engagement",
-    })
+
+    /// The same cutting data with another width of cut.
+    pub const fn with_width(mut self, width: Width) -> Cutting {
+        self.width = width;
+        self
+    }
+
+    /// Checks every value: a positive tool diameter, the width in its range, positive rates.
+    pub fn validate(&self) -> Result<()> {
+        self.tool.validate()?;
+        self.width.validate()?;
+        for (setting, v, what) in [
+            (Setting::Feed, self.feed, "mm/min: the feed must be positive"),
+            (Setting::RapidRate, self.rapid_rate, "mm/min: the rapid rate must be positive"),
+            (Setting::SpindleSpeed, self.spindle_rpm, "rpm: the spindle speed must be positive"),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(Error::setting(setting, format!("{v} {what}")));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Default for Cutting {
+    fn default() -> Self {
+        Cutting::DEFAULT
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_bad_value_names_its_setting() {
+        let bad = |c: Cutting| match c.validate() {
+            Err(Error::Setting { setting, .. }) => setting,
+            other => panic!("{other:?}"),
+        };
+        assert!(Cutting::DEFAULT.validate().is_ok());
+        assert_eq!(bad(Cutting::with_tool_diameter(-1.0)), Setting::ToolDiameter);
+        assert_eq!(bad(Cutting { width: Width::Stepover(1.5), ..Cutting::DEFAULT }), Setting::Stepover);
+        assert_eq!(bad(Cutting { width: Width::EngagementDeg(0.0), ..Cutting::DEFAULT }), Setting::Engagement);
+        assert_eq!(bad(Cutting { feed: f64::NAN, ..Cutting::DEFAULT }), Setting::Feed);
+        assert_eq!(bad(Cutting { rapid_rate: 0.0, ..Cutting::DEFAULT }), Setting::RapidRate);
+        assert_eq!(bad(Cutting { spindle_rpm: -5.0, ..Cutting::DEFAULT }), Setting::SpindleSpeed);
+    }
+
+    #[test]
+    fn width_conversions_are_inverse() {
+        for s in [0.1, 0.25, 0.4, 0.5, 0.9] {
+            let t = Width::Stepover(s).engagement_deg();
+            assert!((Width::EngagementDeg(t).stepover() - s).abs() < 1e-12);
+        }
+        assert!((Width::Stepover(0.5).engagement_deg() - 90.0).abs() < 1e-12);
+    }
 }

@@ -7,8 +7,8 @@
 //! swarf keeps the same four states as exact polygon areas ([`Job`]) and as a raster
 //! ([`crate::sim::raster`]).
 
-use super::cutting::{Tool, Width, check_tool_and_width};
-use crate::error::{Error, Result};
+use super::cutting::Cutting;
+use crate::error::{Error, Result, Setting};
 use crate::geom::{Area, DVec2};
 
 /// One 2.5D job: what to cut, with what, how.
@@ -32,18 +32,10 @@ pub struct Job {
     pub allowance: f64,
     /// Stock to leave on the floor (mm).
     pub allowance_floor: f64,
-    /// The tool.
-    pub tool: Tool,
-    /// Width of cut.
-    pub width: Width,
     /// Largest depth of one level, mm; `None` = the full depth in one level.
     pub stepdown: Option<f64>,
-    /// Cutting feed, mm/min.
-    pub feed: f64,
-    /// Rapid rate for time estimates, mm/min.
-    pub rapid_rate: f64,
-    /// Spindle speed, rpm.
-    pub spindle_rpm: f64,
+    /// The tool, the width of cut and the rates.
+    pub cutting: Cutting,
 }
 
 /// Regions derived from a [`Job`] for one tool, shared by every strategy.
@@ -71,18 +63,20 @@ pub const REGION_TOL: f64 = 0.001;
 
 impl Job {
     /// A job `depth` mm deep from z = 0, with swarf's defaults for what a drawing does not say:
-    /// stock and part tops at 0, no fixtures, no allowance, a flat end mill of
-    /// `tool_diameter`, 40 % stepover, one level, 1000 mm/min feed, 5000 mm/min rapids for the
-    /// time estimates, 10 000 rpm. Set any other field with struct update syntax:
+    /// stock and part tops at 0, no fixtures, no allowance, one level, and the default cutting
+    /// data ([`Cutting::DEFAULT`]) with a flat end mill of `tool_diameter`. Set any other field
+    /// with struct update syntax:
     ///
     /// ```
     /// use swarf::geom::Area;
-    /// use swarf::model::{Job, Width};
+    /// use swarf::model::{Cutting, Job, Width};
     /// let job = Job {
-    ///     width: Width::EngagementDeg(60.0),
+    ///     stepdown: Some(2.5),
     ///     ..Job::new("pocket", Area::rect(0.0, 0.0, 40.0, 30.0), Area::empty(), 6.0, 5.0)
     /// };
     /// assert_eq!(job.floor, -5.0);
+    /// assert_eq!(job.levels(), vec![-2.5, -5.0]);
+    /// assert_eq!(job.cutting.width, Width::DEFAULT);
     /// ```
     pub fn new(name: impl Into<String>, stock: Area, part: Area, tool_diameter: f64, depth: f64) -> Job {
         Job {
@@ -95,66 +89,52 @@ impl Job {
             floor: -depth,
             allowance: 0.0,
             allowance_floor: 0.0,
-            tool: Tool::flat(tool_diameter),
-            width: Width::Stepover(0.4),
             stepdown: None,
-            feed: 1000.0,
-            rapid_rate: 5000.0,
-            spindle_rpm: 10000.0,
+            cutting: Cutting::with_tool_diameter(tool_diameter),
         }
     }
 
-    /// Checks every value a user can get wrong.
+    /// Checks every value a user can get wrong: the cutting data, a positive step-down, finite
+    /// heights with the floor below the stock top, allowances of zero or more, a stock outline.
     pub fn validate(&self) -> Result<()> {
-        check_tool_and_width(&self.tool, self.width)?;
+        self.cutting.validate()?;
         if let Some(s) = self.stepdown
             && !(s.is_finite() && s > 0.0)
         {
-            return Err(Error::param("stepdown", format!("{s} mm: the step-down must be a positive number")));
+            return Err(Error::setting(Setting::Stepdown, format!("{s} mm: the step-down must be a positive number")));
         }
-        for (name, v) in [("stock_top", self.stock_top), ("part_top", self.part_top), ("floor", self.floor)] {
+        for (setting, v) in
+            [(Setting::StockTop, self.stock_top), (Setting::PartTop, self.part_top), (Setting::Floor, self.floor)]
+        {
             if !v.is_finite() {
-                return Err(Error::param(name, "must be a finite number"));
+                return Err(Error::setting(setting, format!("{v}: must be a finite number")));
             }
         }
         if self.floor >= self.stock_top {
-            return Err(Error::param(
-                "floor",
+            return Err(Error::setting(
+                Setting::Floor,
                 format!("floor {} is not below the stock top {}: nothing to cut", self.floor, self.stock_top),
             ));
         }
-        if !(self.allowance.is_finite() && self.allowance >= 0.0) {
-            return Err(Error::param("allowance", "must be zero or positive"));
-        }
-        if !(self.allowance_floor.is_finite() && self.allowance_floor >= 0.0) {
-            return Err(Error::param("allowance_floor", "must be zero or positive"));
-        }
-        if !(self.feed.is_finite() && self.feed > 0.0) {
-            return Err(Error::param("feed", format!("{} mm/min: the feed must be positive", self.feed)));
-        }
-        if !(self.spindle_rpm.is_finite() && self.spindle_rpm > 0.0) {
-            return Err(Error::param(
-                "spindle speed",
-                format!("{} rpm: the spindle speed must be positive", self.spindle_rpm),
-            ));
-        }
-        if !(self.rapid_rate.is_finite() && self.rapid_rate > 0.0) {
-            return Err(Error::param("rapid_rate", "must be positive"));
+        for (setting, v) in [(Setting::Allowance, self.allowance), (Setting::AllowanceFloor, self.allowance_floor)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::setting(setting, format!("{v} mm: must be zero or positive")));
+            }
         }
         if self.stock.is_empty() || self.stock.area() <= 0.0 {
-            return Err(Error::param("stock", "the stock outline is empty"));
+            return Err(Error::job("stock", "the stock outline is empty"));
         }
         Ok(())
     }
 
     /// Tool radius, mm.
     pub fn radius(&self) -> f64 {
-        self.tool.radius()
+        self.cutting.tool.radius()
     }
 
     /// Radial stepover in mm.
     pub fn stepover_mm(&self) -> f64 {
-        self.width.stepover() * self.tool.diameter
+        self.cutting.width.stepover() * self.cutting.tool.diameter
     }
 
     /// The z of each level, top to bottom, ending at the floor (plus floor allowance).
@@ -175,13 +155,13 @@ impl Job {
 
     /// Computes the derived regions for a tool of radius `r` (normally [`Job::radius`]) whose
     /// axis keeps `margin` more than `r` away from the part and fixtures (the strategies' wall
-    /// clearance, see [`crate::strategy::wall_margin`]): `centres` is where the axis may go,
+    /// clearance, see [`crate::strategy::Strategy::wall_margin`]): `centres` is where the axis may go,
     /// `reachable` the material the tool sweeps from there.
     pub fn regions(&self, r: f64, margin: f64) -> Result<Regions> {
         let forbidden = self.part.union(&self.fixtures);
         let keep = if self.allowance > 0.0 { forbidden.offset(self.allowance, REGION_TOL) } else { forbidden };
         let material = self.stock.difference(&keep).without_slivers(1e-9);
-        let (lo, hi) = self.stock.bounds().ok_or_else(|| Error::param("stock", "the stock outline is empty"))?;
+        let (lo, hi) = self.stock.bounds().ok_or_else(|| Error::job("stock", "the stock outline is empty"))?;
         let (lo, hi) = match keep.bounds() {
             Some((a, b)) => (lo.min(a), hi.max(b)),
             None => (lo, hi),
@@ -195,13 +175,13 @@ impl Job {
         let touching = centres.intersection(&material.offset(r, REGION_TOL));
         let reachable = touching.offset(r, REGION_TOL).intersection(&material).without_slivers(1e-6);
         if material.is_empty() {
-            return Err(Error::param(
+            return Err(Error::job(
                 "stock",
                 "there is no material to remove: the part and fixtures cover the whole stock",
             ));
         }
         if reachable.area() < 1e-6 {
-            return Err(Error::param(
+            return Err(Error::job(
                 "tool diameter",
                 format!(
                     "the tool (Ø{:.3} mm) does not fit anywhere in the material to remove: the pocket is narrower than the tool",

@@ -1,8 +1,8 @@
 //! A 3-axis roughing job on a mesh part (paper 3): the part placed in a stock box, the cutting
 //! data, and the levels it is cut at.
 
-use super::{Job, REGION_TOL, Tool, Width};
-use crate::error::{Error, Result};
+use super::{Cutting, Job, REGION_TOL};
+use crate::error::{Error, Result, Setting};
 use crate::geom::mesh::Mesh;
 use crate::geom::{Area, DVec3};
 
@@ -23,18 +23,10 @@ pub struct MeshJob {
     pub allowance: f64,
     /// Stock to leave on the part, above floors and tops (mm).
     pub allowance_floor: f64,
-    /// The tool.
-    pub tool: Tool,
-    /// Width of cut.
-    pub width: Width,
     /// Largest depth of one level, mm.
     pub stepdown: f64,
-    /// Cutting feed, mm/min.
-    pub feed: f64,
-    /// Rapid rate for time estimates, mm/min.
-    pub rapid_rate: f64,
-    /// Spindle speed, rpm.
-    pub spindle_rpm: f64,
+    /// The tool, the width of cut and the rates.
+    pub cutting: Cutting,
 }
 
 /// The shadow is grown by this (mm): it closes the hairline gaps between the shadow and a stock
@@ -51,33 +43,52 @@ const SHADOW_SIMPLIFY: f64 = 0.004;
 const LEVEL_MERGE: f64 = 0.02;
 
 impl MeshJob {
-    /// Checks the numbers a user gives.
+    /// The step-down of a mesh job that names none, as a fraction of the tool diameter.
+    pub const DEFAULT_STEPDOWN_FRACTION: f64 = 0.5;
+
+    /// A job on `mesh` in the stock box `stock_lo`–`stock_hi`, cut to the bottom of the box with
+    /// no allowance and step-downs of [`MeshJob::DEFAULT_STEPDOWN_FRACTION`] of the tool
+    /// diameter.
+    pub fn new(name: impl Into<String>, mesh: Mesh, stock_lo: DVec3, stock_hi: DVec3, cutting: Cutting) -> MeshJob {
+        MeshJob {
+            name: name.into(),
+            mesh,
+            stock_lo,
+            stock_hi,
+            floor: stock_lo.z,
+            allowance: 0.0,
+            allowance_floor: 0.0,
+            stepdown: Self::DEFAULT_STEPDOWN_FRACTION * cutting.tool.diameter,
+            cutting,
+        }
+    }
+
+    /// Checks the numbers a user gives: the cutting data, a positive step-down, a stock box with
+    /// volume, the floor below its top, allowances of zero or more.
     pub fn validate(&self) -> Result<()> {
-        crate::model::check_tool_and_width(&self.tool, self.width)?;
+        self.cutting.validate()?;
         if !(self.stepdown.is_finite() && self.stepdown > 0.0) {
-            return Err(Error::param("stepdown", format!("{} mm: must be positive", self.stepdown)));
+            return Err(Error::setting(
+                Setting::Stepdown,
+                format!("{} mm: the step-down must be a positive number", self.stepdown),
+            ));
         }
         let size = self.stock_hi - self.stock_lo;
         if !(size.x > 0.0 && size.y > 0.0 && size.z > 0.0 && size.is_finite()) {
-            return Err(Error::param("stock_box", "the box must have positive width, length and height"));
+            return Err(Error::setting(Setting::StockBox, "the box must have positive width, length and height"));
         }
         if !(self.floor.is_finite() && self.floor + self.allowance_floor < self.stock_hi.z) {
-            return Err(Error::param(
-                "floor",
+            return Err(Error::setting(
+                Setting::Floor,
                 format!(
                     "{} mm (+ {} mm floor allowance): must be below the stock top {}",
                     self.floor, self.allowance_floor, self.stock_hi.z
                 ),
             ));
         }
-        for (name, v) in [("allowance", self.allowance), ("allowance_floor", self.allowance_floor)] {
+        for (setting, v) in [(Setting::Allowance, self.allowance), (Setting::AllowanceFloor, self.allowance_floor)] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::param(name, format!("{v} mm: must be zero or positive")));
-            }
-        }
-        for (name, v) in [("feed", self.feed), ("rapid_rate", self.rapid_rate), ("spindle", self.spindle_rpm)] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(Error::param(name, format!("{v}: must be positive")));
+                return Err(Error::setting(setting, format!("{v} mm: must be zero or positive")));
             }
         }
         Ok(())
@@ -85,7 +96,7 @@ impl MeshJob {
 
     /// Tool radius.
     pub fn radius(&self) -> f64 {
-        self.tool.radius()
+        self.cutting.tool.radius()
     }
 
     /// The stock outline.
@@ -141,12 +152,8 @@ impl MeshJob {
             floor: z,
             allowance: 0.0,
             allowance_floor: 0.0,
-            tool: self.tool.clone(),
-            width: self.width,
             stepdown: None,
-            feed: self.feed,
-            rapid_rate: self.rapid_rate,
-            spindle_rpm: self.spindle_rpm,
+            cutting: self.cutting.clone(),
         }
     }
 

@@ -7,8 +7,7 @@ mod job;
 mod mesh_job;
 pub mod tooldb;
 
-pub(crate) use cutting::check_tool_and_width;
-pub use cutting::{Tool, Width};
+pub use cutting::{Cutting, Tool, Width};
 pub use job::{Job, REGION_TOL, Regions, farthest_point};
 pub use mesh_job::MeshJob;
 pub(crate) use mesh_job::keep_of;

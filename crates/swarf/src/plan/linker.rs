@@ -23,7 +23,8 @@
 //!    - a **plunge** only when neither fits; plunges are counted and reported.
 //! 3. The pass itself, arc-fitted into lines and arcs, is cut into the model.
 
-use super::pass::{LANDING_MARGIN, Params, Pass, PassKind};
+use super::LinkOptions;
+use super::pass::{LANDING_MARGIN, Pass, PassKind};
 use crate::error::Result;
 use crate::geom::arcfit::{self, Piece};
 use crate::geom::{DVec2, DVec3, polyline_length};
@@ -34,31 +35,6 @@ use crate::sim::sweep::Path;
 use crate::toolpath::{MoveKind, Toolpath};
 
 use super::route;
-
-/// Builds the program from the passes of each level (`levels[i] = (z, passes)`), then the
-/// finishing passes of each level.
-pub fn link(
-    job: &Job,
-    regions: &Regions,
-    params: &Params,
-    levels: &[(f64, Vec<Pass>)],
-    finish: &[(f64, Vec<Pass>)],
-    sim_opts: &SimOptions,
-) -> Result<Toolpath> {
-    let first =
-        levels.iter().flat_map(|l| l.1.iter()).next().and_then(|p| p.pts.first().copied()).unwrap_or(DVec2::ZERO);
-    let mut l = Linker::new(job, regions, params, sim_opts, first)?;
-    let nl = levels.len();
-    for (i, (z, passes)) in levels.iter().enumerate() {
-        l.tp.note(format!("level {} of {}: z {:.3}", i + 1, nl, z));
-        l.down_at = l.down_at.filter(|_| false);
-        for p in order(passes, l.tp.end().truncate()) {
-            l.pass(p, *z);
-        }
-    }
-    l.finishing(finish);
-    Ok(l.finish())
-}
 
 /// Keeps the strategy's order, except that clean-up passes of one level are visited nearest
 /// first.
@@ -103,7 +79,7 @@ pub(crate) fn order(passes: &[Pass], from: DVec2) -> Vec<Pass> {
 
 pub(crate) struct Linker<'a> {
     pub(crate) job: &'a Job,
-    pub(crate) params: &'a Params,
+    pub(crate) link: &'a LinkOptions,
     pub(crate) sim: RasterSim,
     pub(crate) tp: Toolpath,
     pub(crate) safe_z: f64,
@@ -130,24 +106,24 @@ impl<'a> Linker<'a> {
     pub(crate) fn new(
         job: &'a Job,
         regions: &Regions,
-        params: &'a Params,
+        link: &'a LinkOptions,
         sim_opts: &SimOptions,
         first: DVec2,
     ) -> Result<Self> {
         let mut sim = RasterSim::new(job, regions, sim_opts)?;
         sim.track_exact = false;
-        let safe_z = job.top() + params.clearance;
-        let tp = Toolpath::new(job.tool.clone(), DVec3::new(first.x, first.y, safe_z), safe_z);
+        let safe_z = job.top() + link.clearance;
+        let tp = Toolpath::new(job.cutting.tool.clone(), DVec3::new(first.x, first.y, safe_z), safe_z);
         Ok(Linker {
             job,
-            params,
+            link,
             sim,
             tp,
             safe_z,
             r: job.radius(),
-            feed: job.feed,
-            entry_feed: job.feed * params.entry_feed_frac,
-            ramp_feed: job.feed * params.ramp_feed_frac,
+            feed: job.cutting.feed,
+            entry_feed: job.cutting.feed * link.entry_feed_frac,
+            ramp_feed: job.cutting.feed * link.ramp_feed_frac,
             down_at: None,
             step: job.stepover_mm(),
             precut: false,
@@ -180,7 +156,7 @@ impl<'a> Linker<'a> {
                 n.at = n.at.saturating_sub(k);
             }
         }
-        if std::env::var("SWARF_DEBUG").is_ok() {
+        if log::log_enabled!(log::Level::Debug) {
             let mut by: std::collections::BTreeMap<String, (f64, usize)> = Default::default();
             let mut at = self.tp.start;
             for m in &self.tp.moves {
@@ -189,7 +165,7 @@ impl<'a> Linker<'a> {
                 e.1 += 1;
                 at = m.to;
             }
-            eprintln!("moves by kind (chord length mm, count): {by:?}");
+            log::debug!("moves by kind (chord length mm, count): {by:?}");
         }
         let end = self.tp.end();
         self.tp.note("end: retract");
@@ -264,7 +240,7 @@ impl<'a> Linker<'a> {
     pub(crate) fn lowest_clear(&self, a: DVec2, b: DVec2, z: f64) -> Option<f64> {
         let line = |h: f64| Path::Line { a: a.extend(h), b: b.extend(h) };
         let top = self.sim.max_height_near(&line(z), self.r + 0.5 + self.clear_margin) as f64;
-        let zl = (top + self.params.approach).max(z);
+        let zl = (top + self.link.approach).max(z);
         // off the part (and, with fixtures, off the part and the fixtures in plan at any height)
         let kept = || {
             if self.job.fixtures.is_empty() {
@@ -282,8 +258,8 @@ impl<'a> Linker<'a> {
     pub(crate) fn lift_cost(&self, to: DVec2, z: f64) -> f64 {
         let a = self.tp.end().truncate();
         let up = self.lowest_clear(a, to, z).unwrap_or(self.safe_z) - z;
-        let approach = self.params.approach.min(up);
-        (to - a).length() + 2.0 * up - approach + approach * self.job.rapid_rate / self.feed.max(1e-9)
+        let approach = self.link.approach.min(up);
+        (to - a).length() + 2.0 * up - approach + approach * self.job.cutting.rapid_rate / self.feed.max(1e-9)
     }
 
     /// Keeps the tool down at `z` on the way to `to` (where it can stand) round the material on
@@ -356,24 +332,24 @@ impl<'a> Linker<'a> {
     /// `t`: how far along the way the tool still touches the material it touched at the start
     /// (see [`RasterSim::leaving_distance`]): that part is fed, never a rapid.
     pub(crate) fn link_clear(&mut self, to: DVec2, z: f64, t: f64) {
-        if !self.params.feed_links {
+        if !self.link.feed_links {
             let a = self.tp.end().truncate();
             let len = (to - a).length();
             if t > 0.0 {
                 let m = if len > 1e-12 { a + (to - a) * (t / len) } else { to };
-                self.push_line(MoveKind::Link, m.extend(z), self.feed * self.params.feed_boost);
+                self.push_line(MoveKind::Link, m.extend(z), self.feed * self.link.feed_boost);
             }
             if t < len {
                 self.push_line(MoveKind::Rapid, to.extend(z), 0.0);
             }
-        } else if (to - self.tp.end().truncate()).length() > 2.0 * self.job.tool.diameter {
+        } else if (to - self.tp.end().truncate()).length() > 2.0 * self.job.cutting.tool.diameter {
             let lift = (z + 0.5).min(self.safe_z);
             let cur = self.tp.end();
             self.push_line(MoveKind::Rapid, cur.truncate().extend(lift), 0.0);
             self.push_line(MoveKind::Rapid, to.extend(lift), 0.0);
             self.push_line(MoveKind::Descend, to.extend(z), self.feed);
         } else {
-            self.push_line(MoveKind::Link, to.extend(z), self.feed * self.params.feed_boost);
+            self.push_line(MoveKind::Link, to.extend(z), self.feed * self.link.feed_boost);
         }
     }
 
@@ -468,7 +444,7 @@ impl<'a> Linker<'a> {
     /// Gets the tool down to `z` at `start`, entering material as gently as possible.
     pub(crate) fn enter(&mut self, start: DVec2, pts: &[DVec2], z: f64, eps: f64) {
         let r = self.r;
-        let approach = self.params.approach;
+        let approach = self.link.approach;
         let top = self.top_near(start, r + LANDING_MARGIN);
         if top <= z + eps {
             // free or cleared space: rapid close, feed the last bit
@@ -485,17 +461,17 @@ impl<'a> Linker<'a> {
         }
         // helix around the start
         let kd = self.sim.keep_distance(&Path::Line { a: start.extend(z), b: start.extend(z) }, 10.0 * r);
-        let room = kd - r - self.params.arc_tol - 0.005;
-        let rh = (self.params.helix_radius_frac * r).min(room);
-        if rh >= self.params.helix_min_frac * r {
+        let room = kd - r - self.link.arc_tol - 0.005;
+        let rh = (self.link.helix_radius_frac * r).min(room);
+        if rh >= self.link.helix_min_frac * r {
             let top_h = self.top_near(start, r + rh + 0.05).max(z);
             self.helix(start, rh, top_h + approach, z, pts);
             return;
         }
         // ramp along the start of the pass
         let total = polyline_length(pts);
-        let want = (3.0 * self.job.tool.diameter).min(total);
-        if want >= (0.5 * self.job.tool.diameter).max(1.0) {
+        let want = (3.0 * self.job.cutting.tool.diameter).min(total);
+        if want >= (0.5 * self.job.cutting.tool.diameter).max(1.0) {
             let prefix = prefix_of(pts, want);
             let mut top_r = z;
             for w in prefix.windows(2) {
@@ -543,7 +519,7 @@ impl<'a> Linker<'a> {
 
     /// Lands at `p` and cuts sideways to `start`.
     pub(crate) fn land_and_approach(&mut self, p: DVec2, start: DVec2, z: f64) {
-        let approach = self.params.approach;
+        let approach = self.link.approach;
         let top = self.top_near(p, self.r + LANDING_MARGIN);
         let h = (z + approach).max(if top.is_finite() { top + approach } else { z + approach });
         self.travel(p, h);
@@ -565,12 +541,12 @@ impl<'a> Linker<'a> {
     /// circle). Counter-clockwise for climb milling (the material outside the circle is then on
     /// the tool's right).
     pub(crate) fn helix_down(&mut self, c: DVec2, rh: f64, z_from: f64, z: f64, a0: f64) -> f64 {
-        let ccw = self.params.climb;
+        let ccw = self.link.climb;
         let on = |a: f64| c + rh * DVec2::new(a.cos(), a.sin());
         self.travel(c, z_from);
         self.tp.note(format!("helix entry r {:.3} at X{:.3} Y{:.3}", rh, c.x, c.y));
         self.push_line(MoveKind::Rapid, on(a0).extend(z_from), 0.0);
-        let pitch = std::f64::consts::TAU * rh * self.params.ramp_angle_deg.to_radians().tan();
+        let pitch = std::f64::consts::TAU * rh * self.link.ramp_angle_deg.to_radians().tan();
         let total = std::f64::consts::TAU * ((z_from - z) / pitch.max(1e-6));
         let n = (total / std::f64::consts::PI).ceil().max(1.0) as usize;
         let s = if ccw { 1.0 } else { -1.0 };
@@ -590,7 +566,7 @@ impl<'a> Linker<'a> {
 
     pub(crate) fn ramp(&mut self, prefix: &[DVec2], z_from: f64, z: f64) {
         let len = polyline_length(prefix);
-        let drop_per_len = self.params.ramp_angle_deg.to_radians().tan();
+        let drop_per_len = self.link.ramp_angle_deg.to_radians().tan();
         self.travel(prefix[0], z_from);
         self.tp.note(format!("ramp entry along {:.3} mm", len));
         let mut zc = z_from;
@@ -649,7 +625,7 @@ impl<'a> Linker<'a> {
             }
         }
         // runs of equal classification; a point belongs to the run of the segment ending at it
-        let min_air = 2.0 * self.job.tool.diameter;
+        let min_air = 2.0 * self.job.cutting.tool.diameter;
         let mut i = 0;
         while i + 1 < fine.len() {
             let air = fine[i + 1].1;
@@ -687,7 +663,7 @@ impl<'a> Linker<'a> {
 
     /// [`Self::fit_emit`] at the given feed.
     pub(crate) fn fit_emit_feed(&mut self, poly: &[DVec2], z: f64, kind: MoveKind, feed: f64) {
-        for piece in arcfit::fit(poly, self.params.arc_tol) {
+        for piece in arcfit::fit(poly, self.link.arc_tol) {
             match piece {
                 Piece::Line { to } => self.push_line(kind, to.extend(z), feed),
                 Piece::Arc { to, center, ccw } => {

@@ -1,17 +1,23 @@
-//! Linking: turns passes into a program (entries, links, retracts) on a material model, and the
-//! pass types and level geometry strategies share.
+//! Linking: turns passes into a program (entries, links, retracts) on a material model, the
+//! level driver every strategy uses, and the pass types and level geometry strategies share.
 //!
-//! - [`linker`]: entries, keep-down links, lifts and retracts, decided against a raster model
-//!   of the material kept up to date as the program is built;
-//! - [`route`]: ways at depth round the material through cleared space;
-//! - [`pass`]: passes, their kinds, the geometry of a level, the parameters.
+//! - `linker`: entries, keep-down links, lifts and retracts, decided against a raster model of
+//!   the material kept up to date as the program is built;
+//! - `levels`: the level driver (one linker for the whole program, the levels top down, the
+//!   finishing contours);
+//! - `route`: ways at depth round the material through cleared space;
+//! - `pass`: passes, their kinds, the geometry of a level;
+//! - [`LinkOptions`]: what every strategy shares.
 
-pub mod linker;
+pub(crate) mod levels;
+pub(crate) mod linker;
+mod options;
+#[doc(hidden)]
 pub mod pass;
+#[doc(hidden)]
 pub mod route;
 
 pub(crate) use linker::Linker;
-pub use linker::link;
-pub use pass::{
-    DP_TOL, LANDING_MARGIN, LayerGeom, OffsetOrder, Params, Pass, PassKind, StrategyKind, TOUCH_MARGIN, wall_margin,
-};
+pub use options::LinkOptions;
+#[doc(hidden)]
+pub use pass::{DP_TOL, LANDING_MARGIN, LayerGeom, Pass, PassKind, TOUCH_MARGIN};

@@ -291,10 +291,11 @@ pub fn png(svg_text: &str) -> Result<Vec<u8>> {
     let mut opt = resvg::usvg::Options::default();
     opt.fontdb_mut().load_system_fonts();
     let tree = resvg::usvg::Tree::from_str(svg_text, &opt)
-        .map_err(|e| Error::param("plot", format!("cannot render the picture: {e}")))?;
+        .map_err(|e| Error::Output { what: "picture".into(), reason: format!("cannot render it: {e}") })?;
     let size = tree.size().to_int_size();
     let mut pix = resvg::tiny_skia::Pixmap::new(size.width(), size.height())
-        .ok_or_else(|| Error::param("plot", "empty picture"))?;
+        .ok_or_else(|| Error::Output { what: "picture".into(), reason: "it is empty".into() })?;
     resvg::render(&tree, resvg::tiny_skia::Transform::identity(), &mut pix.as_mut());
-    pix.encode_png().map_err(|e| Error::param("plot", format!("cannot encode PNG: {e}")))
+    pix.encode_png()
+        .map_err(|e| Error::Output { what: "picture".into(), reason: format!("cannot encode the PNG: {e}") })
 }

@@ -37,6 +37,19 @@ pub enum Post {
 }
 
 impl Post {
+    /// LinuxCNC.
+    pub const DEFAULT: Post = Post::LinuxCnc;
+    /// The names of the posts, the default first.
+    pub const NAMES: [&'static str; 2] = ["linuxcnc", "grbl"];
+
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Post::LinuxCnc => "linuxcnc",
+            Post::Grbl => "grbl",
+        }
+    }
+
     /// Parses a post name.
     pub fn parse(s: &str) -> Option<Post> {
         match s.to_ascii_lowercase().as_str() {
@@ -45,11 +58,18 @@ impl Post {
             _ => None,
         }
     }
+
     fn dialect(self) -> Box<dyn Dialect> {
         match self {
             Post::LinuxCnc => Box::new(linuxcnc::LinuxCnc),
             Post::Grbl => Box::new(grbl::Grbl),
         }
+    }
+}
+
+impl Default for Post {
+    fn default() -> Self {
+        Post::DEFAULT
     }
 }
 

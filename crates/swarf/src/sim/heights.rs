@@ -125,8 +125,8 @@ pub(crate) fn mesh_rest(job: &MeshJob, sim: &RasterSim) -> Rest {
             r.reachable_mm2 += cell;
             let t = s[k] - low;
             if t > tol {
-                if std::env::var("SWARF_DEBUG").is_ok() && t > 0.5 {
-                    eprintln!("rest {t:.3} mm at {c:?} (stock {:.3}, reach {:.3}, part {:.3})", s[k], reach[k], p[k]);
+                if t > 0.5 {
+                    log::trace!("rest {t:.3} mm at {c:?} (stock {:.3}, reach {:.3}, part {:.3})", s[k], reach[k], p[k]);
                 }
                 r.area_mm2 += cell;
                 r.volume_mm3 += t as f64 * cell;

@@ -20,20 +20,29 @@
 //! every cell, the interval of the move during which the axis is within `R` of the cell centre
 //! ([`sweep`]) gives the lowest tip height over it.
 
+#[doc(hidden)]
 pub mod edt;
+#[doc(hidden)]
 pub mod exact;
+#[doc(hidden)]
 pub mod grid;
+#[doc(hidden)]
 pub mod heights;
+#[doc(hidden)]
 pub mod raster;
-pub mod replay;
+mod replay;
+#[doc(hidden)]
 pub mod sdf;
+#[doc(hidden)]
 pub mod sweep;
 
+#[doc(hidden)]
 pub use raster::RasterSim;
 pub use replay::{Event, Replay, Rest, Sample, SampleKind};
+#[doc(hidden)]
 pub use sdf::SdfSim;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Setting};
 use crate::geom;
 use crate::model::{Job, Regions};
 use crate::toolpath::Toolpath;
@@ -67,7 +76,7 @@ impl std::str::FromStr for SimEngine {
         match s {
             "raster" => Ok(SimEngine::Raster),
             "sdf" => Ok(SimEngine::Sdf),
-            _ => Err(Error::param("--sim", format!("{s:?}: expected raster or sdf"))),
+            _ => Err(Error::setting(Setting::SimEngine, format!("{s:?}: expected raster or sdf"))),
         }
     }
 }
@@ -129,19 +138,50 @@ pub struct SimOptions {
     pub engine: SimEngine,
 }
 
+impl SimOptions {
+    /// The cell size for the tool ([`SimOptions::res_for`]), 0.01 mm gouge tolerance and
+    /// engagement threshold, samples every half cell, at most 60 million cells, the raster
+    /// engine.
+    pub const DEFAULT: SimOptions = SimOptions {
+        res: None,
+        tol: 0.01,
+        eps: 0.01,
+        ring_delta: 1e-4,
+        sample_step: None,
+        max_cells: 60_000_000,
+        heights: None,
+        sure_links: false,
+        engine: SimEngine::Raster,
+    };
+
+    /// Checks the settings: a positive cell size and sample step, tolerances of zero or more, a
+    /// cell budget.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(r) = self.res
+            && !(r.is_finite() && r > 0.0)
+        {
+            return Err(Error::setting(Setting::Resolution, format!("{r} mm: the cell size must be positive")));
+        }
+        if let Some(s) = self.sample_step
+            && !(s.is_finite() && s > 0.0)
+        {
+            return Err(Error::setting(Setting::Simulation, format!("sample step {s} mm: must be positive")));
+        }
+        for (what, v) in [("tol", self.tol), ("eps", self.eps), ("ring_delta", self.ring_delta)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::setting(Setting::Simulation, format!("{what} {v} mm: must be zero or positive")));
+            }
+        }
+        if self.max_cells == 0 {
+            return Err(Error::setting(Setting::Simulation, "max_cells: must be positive"));
+        }
+        Ok(())
+    }
+}
+
 impl Default for SimOptions {
     fn default() -> Self {
-        Self {
-            res: None,
-            tol: 0.01,
-            eps: 0.01,
-            ring_delta: 1e-4,
-            sample_step: None,
-            max_cells: 60_000_000,
-            heights: None,
-            sure_links: false,
-            engine: SimEngine::Raster,
-        }
+        SimOptions::DEFAULT
     }
 }
 

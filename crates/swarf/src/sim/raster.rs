@@ -5,7 +5,7 @@ use super::exact::ExactModel;
 use super::grid::{Grid, ceil_i, floor_i};
 use super::replay::{Replay, Rest};
 use super::sweep::{Fast, Path};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Setting};
 use crate::geom::index::EdgeIndex;
 use crate::geom::{Area, DVec2, DVec3};
 use crate::model::{Job, Regions};
@@ -341,11 +341,11 @@ impl RasterSim {
     /// part near it, padded by a tool radius and a few cells, aligned to the stock's corner.
     pub fn grid_for(job: &Job, keep: &Area, opts: &SimOptions) -> Result<Grid> {
         let r = job.radius();
-        let res = opts.res_for(job.tool.diameter);
+        let res = opts.res_for(job.cutting.tool.diameter);
         if !(res.is_finite() && res > 0.0) {
-            return Err(Error::param("--res", "the simulation cell size must be positive"));
+            return Err(Error::setting(Setting::Resolution, format!("{res} mm: the cell size must be positive")));
         }
-        let (slo, shi) = job.stock.bounds().ok_or_else(|| Error::param("stock", "empty"))?;
+        let (slo, shi) = job.stock.bounds().ok_or_else(|| Error::job("stock", "the stock outline is empty"))?;
         let (mut lo, mut hi) = (slo, shi);
         if let Some((a, b)) = keep.bounds() {
             // the part can be a large frame: only the part near the stock matters
@@ -356,9 +356,9 @@ impl RasterSim {
         let pad = r + 4.0 * res + 1.0;
         let grid = Grid::covering(lo, hi, pad, res, slo);
         if grid.len() > opts.max_cells {
-            return Err(Error::param(
-                "--res",
-                format!("a {}×{} grid at {res} mm is too large; use a coarser --res", grid.nx, grid.ny),
+            return Err(Error::setting(
+                Setting::Resolution,
+                format!("a {}×{} grid at {res} mm is too large; use a coarser cell", grid.nx, grid.ny),
             ));
         }
         Ok(grid)
@@ -1039,7 +1039,7 @@ impl super::replay::Engine for RasterSim {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::Width;
+    use crate::model::{Cutting, Width};
 
     /// A 40 mm square of stock, no part, a Ø6 tool, 0.1 mm cells.
     fn sim() -> RasterSim {
@@ -1048,7 +1048,11 @@ mod tests {
 
     /// The same with another stock and a part.
     fn sim_with(stock: Area, part: Area) -> RasterSim {
-        let job = Job { floor: -5.0, width: Width::Stepover(0.25), ..Job::new("t", stock, part, 6.0, 5.0) };
+        let job = Job {
+            floor: -5.0,
+            cutting: Cutting::with_tool_diameter(6.0).with_width(Width::Stepover(0.25)),
+            ..Job::new("t", stock, part, 6.0, 5.0)
+        };
         let regions = job.regions(job.radius(), 0.0).expect("regions");
         RasterSim::new(&job, &regions, &SimOptions { res: Some(0.1), ..Default::default() }).expect("simulator")
     }
@@ -1061,7 +1065,7 @@ mod tests {
     fn a_speck_between_two_sweeps_keeps_rapids_out() {
         let job = Job {
             floor: -5.0,
-            width: Width::Stepover(0.25),
+            cutting: Cutting::with_tool_diameter(6.0).with_width(Width::Stepover(0.25)),
             ..Job::new("t", Area::rect(-20.0, -20.0, 20.0, 20.0), Area::empty(), 6.0, 5.0)
         };
         let regions = job.regions(job.radius(), 0.0).expect("regions");

@@ -62,7 +62,7 @@ use super::SimOptions;
 use super::replay::Engine;
 use super::replay::{Replay, Rest};
 use super::sweep::{Fast, Path};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Setting};
 use crate::geom::index::EdgeIndex;
 use crate::geom::{Area, DVec2, DVec3};
 use crate::model::{Job, Regions};
@@ -353,14 +353,17 @@ impl SdfSim {
     /// at [`SdfSim::replay`]. 3D jobs (height maps) are not supported.
     pub fn new(job: &Job, regions: &Regions, opts: &SimOptions) -> Result<Self> {
         if opts.heights.is_some() {
-            return Err(Error::param("--sim", "the distance-field simulator handles 2.5D jobs only; use --sim raster"));
+            return Err(Error::setting(
+                Setting::SimEngine,
+                "the distance-field simulator handles 2.5D jobs only; use the raster simulator",
+            ));
         }
         let r = job.radius();
-        let h = opts.res_for(job.tool.diameter);
+        let h = opts.res_for(job.cutting.tool.diameter);
         if !(h.is_finite() && h > 0.0) {
-            return Err(Error::param("--res", "the simulation sample spacing must be positive"));
+            return Err(Error::setting(Setting::Resolution, format!("{h} mm: the sample spacing must be positive")));
         }
-        let (lo, hi) = job.stock.bounds().ok_or_else(|| Error::param("stock", "empty"))?;
+        let (lo, hi) = job.stock.bounds().ok_or_else(|| Error::job("stock", "the stock outline is empty"))?;
         let band = 2.0 * h;
         let pad = band + 2.0 * h;
         let (x0, y0) = (lo.x - pad, lo.y - pad);
@@ -368,9 +371,9 @@ impl SdfSim {
         let ny = ((hi.y + pad - y0) / h).ceil() as usize + 1;
         let (ntx, nty) = (nx.div_ceil(T), ny.div_ceil(T));
         if ntx.saturating_mul(nty).saturating_mul(TT) > opts.max_cells.saturating_mul(4) {
-            return Err(Error::param(
-                "--res",
-                format!("a {}×{} sample field at {h} mm is too large; use a coarser --res", ntx * T, nty * T),
+            return Err(Error::setting(
+                Setting::Resolution,
+                format!("a {}×{} sample field at {h} mm is too large; use a coarser spacing", ntx * T, nty * T),
             ));
         }
         let lat = Lattice { x0, y0, h, ntx, nty, band: band as f32 };
@@ -769,13 +772,13 @@ impl Engine for SdfSim {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::Width;
+    use crate::model::{Cutting, Width};
     use crate::toolpath::{Motion, Move, MoveKind};
 
     fn job() -> Job {
         Job {
             floor: -2.0,
-            width: Width::Stepover(0.25),
+            cutting: Cutting::with_tool_diameter(6.0).with_width(Width::Stepover(0.25)),
             ..Job::new("t", Area::rect(-20.0, -20.0, 20.0, 20.0), Area::empty(), 6.0, 2.0)
         }
     }
@@ -794,7 +797,7 @@ mod tests {
         let job = job();
         let mut s = sim(&job);
         let z = -2.0;
-        let mut tp = Toolpath::new(job.tool, DVec3::new(-10.0, 0.0, 5.0), 5.0);
+        let mut tp = Toolpath::new(job.cutting.tool, DVec3::new(-10.0, 0.0, 5.0), 5.0);
         tp.moves.push(Move {
             to: DVec3::new(-10.0, 0.0, z),
             motion: Motion::Line,
@@ -825,7 +828,7 @@ mod tests {
         // ridge touching zero, which holds no area
         let job = job();
         let mut s = sim(&job);
-        let mut tp = Toolpath::new(job.tool, DVec3::new(-10.0, -17.0, 5.0), 5.0);
+        let mut tp = Toolpath::new(job.cutting.tool, DVec3::new(-10.0, -17.0, 5.0), 5.0);
         tp.moves.push(Move {
             to: DVec3::new(-10.0, -17.0, -2.0),
             motion: Motion::Line,
@@ -842,7 +845,7 @@ mod tests {
     fn tiles_are_freed_once_cut_through() {
         let job = job();
         let mut s = sim(&job);
-        let mut tp = Toolpath::new(job.tool, DVec3::new(-20.0, -20.0, 5.0), 5.0);
+        let mut tp = Toolpath::new(job.cutting.tool, DVec3::new(-20.0, -20.0, 5.0), 5.0);
         tp.moves.push(Move {
             to: DVec3::new(-20.0, -20.0, -2.0),
             motion: Motion::Line,

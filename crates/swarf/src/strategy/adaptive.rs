@@ -81,14 +81,14 @@
 //! The bound is not met everywhere yet — see `docs/RESULTS.md` for the case and the random
 //! pockets where the clean-up passes or a tight pocket still exceed it.
 
-use crate::error::Result;
+use super::{Clearing, Context};
+use crate::error::{Error, Result, Setting};
 use crate::geom::index::EdgeIndex;
 use crate::geom::simplify::douglas_peucker;
 use crate::geom::{DVec2, polyline_length, wrap_pi};
-use crate::model::{Job, Regions};
-use crate::plan::Linker;
-use crate::plan::{DP_TOL, LANDING_MARGIN, LayerGeom, Params, Pass};
-use crate::sim::SimOptions;
+use crate::model::Job;
+use crate::plan::levels::{Levels, drive};
+use crate::plan::{DP_TOL, LANDING_MARGIN, LayerGeom, Linker};
 use crate::sim::edt;
 use crate::sim::sweep::Path;
 use crate::toolpath::{MoveKind, Toolpath};
@@ -116,73 +116,127 @@ const HELIX_MIN_SHARE: f64 = 0.05;
 /// Degrees skipped at the tool's side when looking for the engaged arc (eq. 8).
 const SIDE_SKIP: f64 = 15.0;
 
-/// Builds the adaptive program of a job: every level by the state machine, then clean-up and
-/// finishing passes.
-pub fn link_adaptive(
-    job: &Job,
-    regions: &Regions,
-    geom: &LayerGeom,
-    params: &Params,
-    zs: &[f64],
-    finish: &[(f64, Vec<Pass>)],
-    sim_opts: &SimOptions,
-) -> Result<Toolpath> {
-    let first = geom.centres.bounds().map_or(DVec2::ZERO, |(lo, _)| lo);
-    let mut l = Linker::new(job, regions, params, sim_opts, first)?;
-    adaptive_levels(&mut l, job, geom, params, zs, &mut |_, _| {});
-    l.finishing(finish);
-    Ok(l.finish())
+/// The adaptive strategy's options (paper 1).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AdaptiveOptions {
+    /// How far above the reference engagement contouring along a wall may go before the tool
+    /// turns back to constant-engagement milling (paper 1 §4.4), degrees, in [0°, 90°].
+    pub overshoot_deg: f64,
+    /// Clean-up: round the wall contour's inside corners (a fillet of at most 0.15 R that holds
+    /// the engagement there down and leaves a sliver of at most 0.3 % of the reachable area).
+    /// Off for z-level jobs, where the slivers of every level stack into a wall corner a whole
+    /// depth tall.
+    pub corner_fillets: bool,
+    /// Clean-up: contour every wall at every level, not only near the material the passes left
+    /// as the planner's raster sees it (a sliver thinner than a cell along a wall escapes it;
+    /// z-level jobs stack such slivers into walls a whole depth tall).
+    pub full_wall_contour: bool,
 }
 
-/// The adaptive clearing of every level in `zs`, after `before` has cut what it cuts at that
-/// level (nothing for plain adaptive; the spiral over a pocket's island-free core for the
-/// spiral strategy on a pocket with islands): the constant-engagement passes start from what
-/// the material model says is left.
-pub(super) fn adaptive_levels<'a>(
-    l: &mut Linker<'a>,
-    job: &Job,
-    geom: &LayerGeom,
-    params: &Params,
-    zs: &[f64],
-    before: &mut dyn FnMut(&mut Linker<'a>, f64),
-) {
-    let t0 = std::time::Instant::now();
-    l.clear_margin = 0.75 * l.sim.grid.res;
-    let mut eng = Engine::new(l, job, geom, params);
-    let n = zs.len();
-    for (i, z) in zs.iter().enumerate() {
-        eng.l.tp.note(format!("level {} of {}: z {:.3}", i + 1, n, z));
-        eng.l.down_at = None;
-        before(eng.l, *z);
-        eng.level(*z);
-        if std::env::var("SWARF_DEBUG").is_ok() {
-            eprintln!("adaptive level {} done at {:.3} s", i + 1, t0.elapsed().as_secs_f64());
+impl AdaptiveOptions {
+    /// A 20° overshoot, fillets in the corners, the wall contour where material is left.
+    pub const DEFAULT: AdaptiveOptions =
+        AdaptiveOptions { overshoot_deg: 20.0, corner_fillets: true, full_wall_contour: false };
+}
+
+impl Default for AdaptiveOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+impl Clearing for AdaptiveOptions {
+    const NAME: &'static str = "adaptive";
+
+    fn validate(&self) -> Result<()> {
+        if !(self.overshoot_deg >= 0.0 && self.overshoot_deg <= 90.0) {
+            return Err(Error::setting(Setting::Overshoot, format!("{}°: must be in [0°, 90°]", self.overshoot_deg)));
         }
+        Ok(())
+    }
+
+    /// Adaptive passes are also simplified (Douglas–Peucker) before arc fitting.
+    fn wall_slack(&self) -> f64 {
+        DP_TOL
+    }
+
+    fn plan(&self, cx: &Context) -> Result<Option<Toolpath>> {
+        let first = cx.geom.centres.bounds().map_or(DVec2::ZERO, |(lo, _)| lo);
+        let mut levels = AdaptiveLevels::new(cx, self, first, |_: &mut Linker, _| {});
+        drive(cx.job, cx.regions, cx.link, cx.sim, cx.zs, cx.finish, &mut levels).map(Some)
+    }
+}
+
+/// The adaptive clearing of every level, after `before` has cut what it cuts at that level
+/// (nothing for plain adaptive; the spiral over a pocket's island-free core for the spiral
+/// strategy on a pocket with islands): the constant-engagement passes start from what the
+/// material model says is left, and clean-up passes follow them at each level.
+pub(super) struct AdaptiveLevels<'c, F> {
+    job: &'c Job,
+    geom: &'c LayerGeom,
+    opts: &'c AdaptiveOptions,
+    first: DVec2,
+    setup: Option<Setup>,
+    before: F,
+    t0: std::time::Instant,
+    done: usize,
+}
+
+impl<'c, F> AdaptiveLevels<'c, F> {
+    pub(super) fn new(cx: &Context<'c>, opts: &'c AdaptiveOptions, first: DVec2, before: F) -> Self {
+        AdaptiveLevels {
+            job: cx.job,
+            geom: cx.geom,
+            opts,
+            first,
+            setup: None,
+            before,
+            t0: std::time::Instant::now(),
+            done: 0,
+        }
+    }
+}
+
+impl<'a, F: FnMut(&mut Linker<'a>, f64)> Levels<'a> for AdaptiveLevels<'_, F> {
+    fn first(&self) -> DVec2 {
+        self.first
+    }
+
+    fn begin(&mut self, l: &mut Linker<'a>) -> Result<()> {
+        l.clear_margin = 0.75 * l.sim.grid.res;
+        self.setup = Some(Setup::new(l, self.job, self.geom, self.opts));
+        Ok(())
+    }
+
+    fn level(&mut self, l: &mut Linker<'a>, z: f64) -> Result<()> {
+        let Some(setup) = &self.setup else { return Ok(()) };
+        (self.before)(l, z);
+        Engine::new(l, setup).level(z);
+        self.done += 1;
+        log::debug!("adaptive level {} done at {:.3} s", self.done, self.t0.elapsed().as_secs_f64());
         // what the constant-engagement passes left (read off the material model): clean-up
         // passes, before the next level so that neither they nor the next level's passes cut
         // deeper than one step-down
-        let left = eng.l.sim.material_area(*z);
-        if left.is_empty() && !params.full_wall_contour {
-            continue;
+        let left = l.sim.material_area(z);
+        if left.is_empty() && !self.opts.full_wall_contour {
+            return Ok(());
         }
-        let extra = crate::strategy::cleanup::passes_for_leftover(geom, params, &left, eng.l.sim.grid.res);
-        if std::env::var("SWARF_DEBUG").is_ok() {
-            eprintln!("leftover at z {z}: {:.2} mm2, {} clean-up passes", left.area(), extra.len());
+        let extra = super::cleanup::passes_for_leftover(self.geom, l.link.climb, self.opts, &left, l.sim.grid.res);
+        if log::log_enabled!(log::Level::Debug) {
+            log::debug!("leftover at z {z}: {:.2} mm2, {} clean-up passes", left.area(), extra.len());
             for ring in left.rings().filter(|r| crate::geom::ring_area(r).abs() > 0.5) {
-                eprintln!("  piece of {:.2} mm2 at {:?}", crate::geom::ring_area(ring), ring[0]);
+                log::trace!("  piece of {:.2} mm2 at {:?}", crate::geom::ring_area(ring), ring[0]);
             }
         }
         if extra.is_empty() {
-            continue;
+            return Ok(());
         }
-        eng.l.tp.note(format!("clean-up at z {z:.3}"));
-        eng.l.down_at = None;
-        for p in crate::plan::linker::order(&extra, eng.l.tp.end().truncate()) {
-            eng.l.pass(p, *z);
+        l.tp.note(format!("clean-up at z {z:.3}"));
+        l.down_at = None;
+        for p in crate::plan::linker::order(&extra, l.tp.end().truncate()) {
+            l.pass(p, z);
         }
-    }
-    if std::env::var("SWARF_DEBUG").is_ok() {
-        eprintln!("adaptive clean-up done at {:.3} s", t0.elapsed().as_secs_f64());
+        Ok(())
     }
 }
 
@@ -314,8 +368,8 @@ enum Mode {
     Contour { ring: usize, s: f64, dir: f64, walked: f64 },
 }
 
-struct Engine<'a, 'b> {
-    l: &'b mut Linker<'a>,
+/// What the state machine works with that stays the same from level to level.
+struct Setup {
     r: f64,
     /// The radius the planner cuts its model with: `r` less the largest distance between the
     /// planned steps and the emitted program (Douglas–Peucker, arc fitting, the post's
@@ -330,13 +384,49 @@ struct Engine<'a, 'b> {
     walls: Walls,
     /// Distance to the walls (mm) per cell of the planning grid.
     dk: Vec<f32>,
+    boost_ring: Vec<DVec2>,
+}
+
+impl Setup {
+    fn new(l: &Linker, job: &Job, geom: &LayerGeom, opts: &AdaptiveOptions) -> Setup {
+        let r = job.radius();
+        // (the walls of the layer geometry are grown by the radius and this)
+        let margin = geom.wall_level - r;
+        let grid = l.sim.grid;
+        let keep = l.sim.keep_mask();
+        let dk: Vec<f32> = edt::distance(&keep, grid.nx, grid.ny).iter().map(|d| d * grid.res as f32).collect();
+        let walls = Walls::new(&geom.walls, (2.0 * r).max(1.0));
+        let theta = job.cutting.width.engagement_deg();
+        let step = (0.1 * job.cutting.tool.diameter).max(2.0 * grid.res);
+        // the enlarged ring of footnote 3: 10 % of the radius, at least 5 cells
+        let boost = (0.1 * r).max(5.0 * grid.res);
+        let ring = l.sim.ring().to_vec();
+        let boost_ring = ring.iter().map(|o| *o * ((o.length() + boost) / o.length())).collect();
+        Setup {
+            r_plan: r - (DP_TOL + l.link.arc_tol + 0.001),
+            r,
+            theta,
+            over: opts.overshoot_deg,
+            climb: l.link.climb,
+            step,
+            margin,
+            walls,
+            dk,
+            boost_ring,
+        }
+    }
+}
+
+/// The state machine of one level.
+struct Engine<'a, 'b> {
+    l: &'b mut Linker<'a>,
+    c: &'b Setup,
     resume: Vec<Resume>,
     /// Lateral starts that removed next to nothing this level (not tried again).
     failed: Vec<DVec2>,
     /// Blocks of the lateral search that hold reachable material (see [`Engine::lateral`]).
     coarse: Vec<bool>,
     flags: Vec<bool>,
-    boost_ring: Vec<DVec2>,
     z: f64,
     why: &'static str,
     /// Lateral starts may stand anywhere in a coarse block, not only at its centre (set when
@@ -345,36 +435,14 @@ struct Engine<'a, 'b> {
 }
 
 impl<'a, 'b> Engine<'a, 'b> {
-    fn new(l: &'b mut Linker<'a>, job: &Job, geom: &LayerGeom, params: &Params) -> Self {
-        let r = job.radius();
-        // (the walls of the layer geometry are grown by the radius and this)
-        let margin = geom.wall_level - r;
-        let grid = l.sim.grid;
-        let keep = l.sim.keep_mask();
-        let dk: Vec<f32> = edt::distance(&keep, grid.nx, grid.ny).iter().map(|d| d * grid.res as f32).collect();
-        let walls = Walls::new(&geom.walls, (2.0 * r).max(1.0));
-        let theta = job.width.engagement_deg();
-        let step = (0.1 * job.tool.diameter).max(2.0 * grid.res);
-        // the enlarged ring of footnote 3: 10 % of the radius, at least 5 cells
-        let boost = (0.1 * r).max(5.0 * grid.res);
-        let ring = l.sim.ring().to_vec();
-        let boost_ring = ring.iter().map(|o| *o * ((o.length() + boost) / o.length())).collect();
+    fn new(l: &'b mut Linker<'a>, c: &'b Setup) -> Self {
         Engine {
-            r_plan: r - (DP_TOL + params.arc_tol + 0.001),
             l,
-            r,
-            theta,
-            over: params.overshoot_deg,
-            climb: params.climb,
-            step,
-            margin,
-            walls,
-            dk,
+            c,
             resume: Vec::new(),
             failed: Vec::new(),
             coarse: Vec::new(),
             flags: Vec::new(),
-            boost_ring,
             z: 0.0,
             why: "",
             relaxed: false,
@@ -385,18 +453,18 @@ impl<'a, 'b> Engine<'a, 'b> {
     /// the overshoot of §4.4, but at most `CONTOUR_SLACK_DEG`, so that the wall-following
     /// stays well inside the stated bound.
     fn switch_slack(&self) -> f64 {
-        (0.5 * self.over).min(CONTOUR_SLACK_DEG)
+        (0.5 * self.c.over).min(CONTOUR_SLACK_DEG)
     }
 
     /// Distance from `p` to the walls read from the grid (±one cell).
     fn dk_at(&self, p: DVec2) -> f64 {
         let g = self.l.sim.grid;
-        g.cell_of(p).map_or(0.0, |(i, j)| self.dk[j * g.nx + i] as f64)
+        g.cell_of(p).map_or(0.0, |(i, j)| self.c.dk[j * g.nx + i] as f64)
     }
 
     /// May the tool axis stand at `p`?
     fn allowed(&self, p: DVec2) -> bool {
-        let need = self.r + self.margin;
+        let need = self.c.r + self.c.margin;
         let res = self.l.sim.grid.res;
         let d = self.dk_at(p);
         if d >= need + 2.0 * res {
@@ -442,22 +510,20 @@ impl<'a, 'b> Engine<'a, 'b> {
             };
             let lateral_at = match &start {
                 Start::Lateral { from, .. } => Some(*from),
-                Start::Resume { ring, s, .. } => Some(self.walls.at(*ring, *s).0),
+                Start::Resume { ring, s, .. } => Some(self.c.walls.at(*ring, *s).0),
                 _ => None,
             };
             let pass = self.run(start);
-            if std::env::var("SWARF_DEBUG").is_ok() {
-                eprintln!(
-                    "pass {} {kind}: {} points, {:.1} mm from {:?}, removed {} cells, {} left, ended: {}",
-                    passes.len(),
-                    pass.len(),
-                    polyline_length(&pass),
-                    pass.first(),
-                    before - self.l.sim.reach_left(),
-                    self.l.sim.reach_left(),
-                    self.why
-                );
-            }
+            log::trace!(
+                "pass {} {kind}: {} points, {:.1} mm from {:?}, removed {} cells, {} left, ended: {}",
+                passes.len(),
+                pass.len(),
+                polyline_length(&pass),
+                pass.first(),
+                before - self.l.sim.reach_left(),
+                self.l.sim.reach_left(),
+                self.why
+            );
             if pass.len() > 1 {
                 passes.push(pass);
             }
@@ -486,28 +552,28 @@ impl<'a, 'b> Engine<'a, 'b> {
     fn find_start(&mut self) -> Option<Start> {
         // 1. resume points, last first
         while let Some(rp) = self.resume.pop() {
-            let (p, t) = self.walls.at(rp.ring, rp.s);
+            let (p, t) = self.c.walls.at(rp.ring, rp.s);
             // a resume point that gave nothing before
-            if self.failed.iter().any(|f| (*f - p).length() < 0.5 * self.step) {
+            if self.failed.iter().any(|f| (*f - p).length() < 0.5 * self.c.step) {
                 continue;
             }
             let t = t * rp.dir;
-            let (ahead, _) = self.walls.at(rp.ring, rp.s + rp.dir * self.step);
+            let (ahead, _) = self.c.walls.at(rp.ring, rp.s + rp.dir * self.c.step);
             let e = self.l.sim.front_engagement(ahead, self.z, t);
             // nothing left there, or still too heavy to follow the wall: drop it
-            if e > self.theta + self.switch_slack()
-                || (e < AIR_DEG && self.l.sim.front_engagement(p + t * self.r, self.z, t) < AIR_DEG)
+            if e > self.c.theta + self.switch_slack()
+                || (e < AIR_DEG && self.l.sim.front_engagement(p + t * self.c.r, self.z, t) < AIR_DEG)
             {
                 continue;
             }
             // land behind it, where the contour is already cut
-            let mut back = self.step;
-            while back < 6.0 * self.r {
-                let (q, _) = self.walls.at(rp.ring, rp.s - rp.dir * back);
+            let mut back = self.c.step;
+            while back < 6.0 * self.c.r {
+                let (q, _) = self.c.walls.at(rp.ring, rp.s - rp.dir * back);
                 if self.clear(q) {
                     return Some(Start::Resume { ring: rp.ring, s: rp.s, dir: rp.dir, land: back });
                 }
-                back += self.step;
+                back += self.c.step;
             }
         }
         // 2. lateral entry tangent to the stock from free or cleared space
@@ -518,16 +584,16 @@ impl<'a, 'b> Engine<'a, 'b> {
         // 3. helix at the farthest point from the walls that has material, 4. plunge
         let (c, d) = self.deepest()?;
         // not for a few slivers within the tool's reach there (the clean-up takes them)
-        if self.l.sim.material_area_near(c, self.z, 2.0 * self.r)
-            < HELIX_MIN_SHARE * std::f64::consts::PI * self.r * self.r
+        if self.l.sim.material_area_near(c, self.z, 2.0 * self.c.r)
+            < HELIX_MIN_SHARE * std::f64::consts::PI * self.c.r * self.c.r
         {
             return None;
         }
         // the grid's distance is good to a cell: measure exactly at the chosen centre
         let d = d.min(self.l.sim.keep_distance(&Path::Line { a: c.extend(0.0), b: c.extend(0.0) }, d + 1.0));
-        let room = d - self.r - self.margin - 0.005;
-        let rh = (self.l.params.helix_radius_frac * self.r).min(room);
-        if rh >= self.l.params.helix_min_frac * self.r {
+        let room = d - self.c.r - self.c.margin - 0.005;
+        let rh = (self.l.link.helix_radius_frac * self.c.r).min(room);
+        if rh >= self.l.link.helix_min_frac * self.c.r {
             Some(Start::Helix { c, r: rh })
         } else if room >= 0.0 {
             Some(match self.ramp_line(c) {
@@ -544,9 +610,9 @@ impl<'a, 'b> Engine<'a, 'b> {
     /// headings, along which the tool stays clear of the walls (by the margin), up to three
     /// diameters; none shorter than half a diameter (or 1 mm).
     fn ramp_line(&self, c: DVec2) -> Option<DVec2> {
-        let need = self.r + self.margin + 0.005;
-        let max = 6.0 * self.r;
-        let min = self.r.max(1.0);
+        let need = self.c.r + self.c.margin + 0.005;
+        let max = 6.0 * self.c.r;
+        let min = self.c.r.max(1.0);
         let clear =
             |b: DVec2| self.l.sim.keep_distance(&Path::Line { a: c.extend(0.0), b: b.extend(0.0) }, need + 1.0) >= need;
         let mut best: Option<(f64, DVec2)> = None;
@@ -583,7 +649,7 @@ impl<'a, 'b> Engine<'a, 'b> {
 
     /// How far from a landing point the material is looked for (see [`Self::clear`]).
     fn landing_reach(&self) -> f64 {
-        self.r + LANDING_MARGIN + 1.5 * self.l.sim.grid.res
+        self.c.r + LANDING_MARGIN + 1.5 * self.l.sim.grid.res
     }
 
     /// A tool centre that is clear, allowed and within a few cells of remaining material,
@@ -591,7 +657,7 @@ impl<'a, 'b> Engine<'a, 'b> {
     fn lateral(&mut self, tries: usize) -> Option<(DVec2, DVec2, f64)> {
         let g = self.l.sim.grid;
         // coarse grid: blocks of `f` cells, a block has material if any of its cells does
-        let f = ((self.r / 4.0) / g.res).floor().max(1.0) as usize;
+        let f = ((self.c.r / 4.0) / g.res).floor().max(1.0) as usize;
         let (cx, cy) = (g.nx.div_ceil(f), g.ny.div_ceil(f));
         // kept from call to call; only the blocks the passes since cleared are read again
         // (a scan of the whole grid per start dominated the planning time)
@@ -636,7 +702,7 @@ impl<'a, 'b> Engine<'a, 'b> {
         // over the blocks with material and that much around them (late in a level, a few
         // scraps of a large grid)
         let (i0, i1, j0, j1) = {
-            let k = ((self.r + 2.5 * cell) / cell).ceil() as usize + 1;
+            let k = ((self.c.r + 2.5 * cell) / cell).ceil() as usize + 1;
             let (mut i0, mut i1, mut j0, mut j1) = (cx, 0, cy, 0);
             for (n, _) in mat.iter().enumerate().filter(|(_, m)| **m) {
                 let (i, j) = (n % cx, n / cx);
@@ -653,12 +719,12 @@ impl<'a, 'b> Engine<'a, 'b> {
             for i in i0..=i1 {
                 let d = dm[(j - j0) * sx + (i - i0)] as f64 * cell;
                 // block centres a little more than a radius from the material
-                if d < self.r + 0.5 * cell || d > self.r + 2.5 * cell {
+                if d < self.c.r + 0.5 * cell || d > self.c.r + 2.5 * cell {
                     continue;
                 }
                 let mut p = DVec2::new(g.x0 + (i as f64 + 0.5) * cell, g.y0 + (j as f64 + 0.5) * cell);
                 let mut dk = self.dk_at(p);
-                if dk < self.r + self.margin + cell {
+                if dk < self.c.r + self.c.margin + cell {
                     if !self.relaxed {
                         continue;
                     }
@@ -670,7 +736,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                         .map(|q| (self.dk_at(q), q))
                         .max_by(|a, b| a.0.total_cmp(&b.0))
                         .expect("nine points");
-                    if best.0 < self.r + self.margin + 2.0 * g.res {
+                    if best.0 < self.c.r + self.c.margin + 2.0 * g.res {
                         continue;
                     }
                     (dk, p) = best;
@@ -680,7 +746,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                 }
                 // not tangent to the part (§4.5): starts that are within a tool diameter of the
                 // walls come after all the others, which clear toward the walls first
-                let near_wall = dk < 3.0 * self.r + self.margin;
+                let near_wall = dk < 3.0 * self.c.r + self.c.margin;
                 cands.push(((p - cur).length() + if near_wall { 1e6 } else { 0.0 }, p));
             }
         }
@@ -719,7 +785,7 @@ impl<'a, 'b> Engine<'a, 'b> {
             // the pass must find the material from there (its ring, or the enlarged one of
             // footnote 3), or it would end at once after a descent for nothing
             let at = p + u * lo;
-            let heading = dir + if self.climb { 1.0 } else { -1.0 } * FRAC_PI_2;
+            let heading = dir + if self.c.climb { 1.0 } else { -1.0 } * FRAC_PI_2;
             if self.direction(at, heading).is_none() {
                 self.failed.push(cand);
                 continue;
@@ -734,11 +800,11 @@ impl<'a, 'b> Engine<'a, 'b> {
     /// but only where walls bound the front closely both ways (a slot) and the move ends at
     /// one; otherwise `p` itself.
     fn upstream(&self, p: DVec2, dir: f64, cell: f64) -> DVec2 {
-        let s = if self.climb { 1.0 } else { -1.0 };
+        let s = if self.c.climb { 1.0 } else { -1.0 };
         let h = dir + s * FRAC_PI_2;
         let back = -DVec2::new(h.cos(), h.sin());
         let res = self.l.sim.grid.res;
-        let rho = self.r + 2.5 * cell;
+        let rho = self.c.r + 2.5 * cell;
         let off = -DVec2::new(dir.cos(), dir.sin());
         let ds = res.max(0.5 * cell);
         // only where the front is short — a wall within half a radius behind and one within a
@@ -747,12 +813,12 @@ impl<'a, 'b> Engine<'a, 'b> {
         let wall = |sign: f64, reach: f64| {
             (1..=(reach / ds).ceil() as usize).any(|k| !self.allowed(p + back * (sign * k as f64 * ds)))
         };
-        if !wall(-1.0, 0.5 * self.r) || !wall(1.0, 2.0 * self.r) {
+        if !wall(-1.0, 0.5 * self.c.r) || !wall(1.0, 2.0 * self.c.r) {
             return p;
         }
         let mut q = p;
         let mut t = 0.0;
-        while t < 2.0 * self.r {
+        while t < 2.0 * self.c.r {
             let mut n = q + back * ds;
             if !self.allowed(n) {
                 // at a wall: start there
@@ -791,7 +857,7 @@ impl<'a, 'b> Engine<'a, 'b> {
         let g = self.l.sim.grid;
         let thr = (self.z + 0.01) as f32;
         for extra in [0.5, 1.0, 2.0, 3.0] {
-            let rho = self.r + extra * (self.r / 4.0).max(g.res);
+            let rho = self.c.r + extra * (self.c.r / 4.0).max(g.res);
             let mut sum = DVec2::ZERO;
             for k in 0..128 {
                 let a = TAU * k as f64 / 128.0;
@@ -817,8 +883,8 @@ impl<'a, 'b> Engine<'a, 'b> {
         let thr = (self.z + 0.01) as f32;
         let mut best: Option<(f32, usize)> = None;
         for k in 0..g.len() {
-            if reach[k] && h[k] > thr && best.is_none_or(|b| self.dk[k] > b.0) {
-                best = Some((self.dk[k], k));
+            if reach[k] && h[k] > thr && best.is_none_or(|b| self.c.dk[k] > b.0) {
+                best = Some((self.c.dk[k], k));
             }
         }
         let (d, k) = best?;
@@ -833,7 +899,7 @@ impl<'a, 'b> Engine<'a, 'b> {
         let z = self.z;
         let (mut c, mut alpha, mut mode) = match start {
             Start::Resume { ring, s, dir, land } => {
-                let (q, t) = self.walls.at(ring, s - dir * land);
+                let (q, t) = self.c.walls.at(ring, s - dir * land);
                 self.arrive(q, z);
                 let t = t * dir;
                 (q, t.y.atan2(t.x), Mode::Contour { ring, s: s - dir * land, dir, walked: 0.0 })
@@ -841,32 +907,32 @@ impl<'a, 'b> Engine<'a, 'b> {
             Start::Lateral { at, dir, .. } => {
                 self.arrive(at, z);
                 // heading so that the material is on the milling side (the right for climb)
-                let s = if self.climb { 1.0 } else { -1.0 };
+                let s = if self.c.climb { 1.0 } else { -1.0 };
                 (at, dir + s * FRAC_PI_2, Mode::Engage)
             }
             Start::Helix { c, r } => {
                 let a_end = self.l.helix_down(
                     c,
                     r,
-                    self.l.top_near(c, self.r + r + 0.05).max(z) + self.l.params.approach,
+                    self.l.top_near(c, self.c.r + r + 0.05).max(z) + self.l.link.approach,
                     z,
                     0.0,
                 );
                 let p = c + r * DVec2::new(a_end.cos(), a_end.sin());
-                let s = if self.climb { 1.0 } else { -1.0 };
+                let s = if self.c.climb { 1.0 } else { -1.0 };
                 (p, a_end + s * FRAC_PI_2, Mode::Engage)
             }
             Start::Ramp { c, to } => {
                 let line = Path::Line { a: c.extend(0.0), b: to.extend(0.0) };
-                let top = (self.l.sim.max_height_near(&line, self.r + 0.05) as f64).max(z);
-                self.l.ramp(&[c, to], top + self.l.params.approach, z);
+                let top = (self.l.sim.max_height_near(&line, self.c.r + 0.05) as f64).max(z);
+                self.l.ramp(&[c, to], top + self.l.link.approach, z);
                 let d = to - c;
-                let s = if self.climb { 1.0 } else { -1.0 };
+                let s = if self.c.climb { 1.0 } else { -1.0 };
                 (c, d.y.atan2(d.x) + s * FRAC_PI_2, Mode::Engage)
             }
             Start::Plunge { c } => {
-                let top = self.l.top_near(c, self.r);
-                self.l.travel(c, top + self.l.params.approach);
+                let top = self.l.top_near(c, self.c.r);
+                self.l.travel(c, top + self.l.link.approach);
                 self.l.tp.note("plunge: no room for a helix and no way in from the side");
                 self.l.push_line(MoveKind::Plunge, c.extend(z), self.l.entry_feed);
                 (c, 0.0, Mode::Engage)
@@ -890,20 +956,20 @@ impl<'a, 'b> Engine<'a, 'b> {
                         c = n;
                         alpha = a;
                         // circling without removing anything the tool must clear
-                        air = if self.l.sim.reach_left() == left { air + self.step } else { 0.0 };
-                        if air > TAU * self.r {
+                        air = if self.l.sim.reach_left() == left { air + self.c.step } else { 0.0 };
+                        if air > TAU * self.c.r {
                             self.why = "constant engagement in air";
                             break;
                         }
                     }
                     EngageStep::Wall => {
-                        let Some((ring, s, q)) = self.walls.project(c, 3.0 * self.step + self.r) else { break };
+                        let Some((ring, s, q)) = self.c.walls.project(c, 3.0 * self.c.step + self.c.r) else { break };
                         // the wall ahead is too heavy to follow: leave it, turning away from
                         // the material, when that is possible
                         {
-                            let (_, t) = self.walls.at(ring, s);
+                            let (_, t) = self.c.walls.at(ring, s);
                             let dir = self.contour_direction(q, t, alpha);
-                            let (n, t2) = self.walls.at(ring, s + dir * self.step);
+                            let (n, t2) = self.c.walls.at(ring, s + dir * self.c.step);
                             let e = self.l.sim.front_engagement(n, z, t2 * dir);
                             // and the step onto the wall must not be heavy either
                             let e_q = if (q - c).length() > 1e-6 {
@@ -911,14 +977,14 @@ impl<'a, 'b> Engine<'a, 'b> {
                             } else {
                                 0.0
                             };
-                            let heavy = e > self.theta + self.switch_slack() || e_q > self.theta + STEP_SLACK_DEG;
+                            let heavy = e > self.c.theta + self.switch_slack() || e_q > self.c.theta + STEP_SLACK_DEG;
                             if heavy && let Some((n2, a)) = self.away_step(c, alpha) {
                                 self.cut_to(&mut tr, n2);
                                 c = n2;
                                 alpha = a;
                                 continue;
                             }
-                            if e_q > self.theta + CONTOUR_SLACK_DEG + 5.0 {
+                            if e_q > self.c.theta + CONTOUR_SLACK_DEG + 5.0 {
                                 self.why = "wall too heavy to reach";
                                 break;
                             }
@@ -931,7 +997,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                             c = q;
                         }
                         air = 0.0;
-                        let (_, t) = self.walls.at(ring, s);
+                        let (_, t) = self.c.walls.at(ring, s);
                         let dir = self.contour_direction(c, t, alpha);
                         mode = Mode::Contour { ring, s, dir, walked: 0.0 };
                         alpha = (t * dir).y.atan2((t * dir).x);
@@ -942,11 +1008,11 @@ impl<'a, 'b> Engine<'a, 'b> {
                     }
                 },
                 Mode::Contour { ring, s, dir, walked } => {
-                    let ns = s + dir * self.step;
-                    let (n, t) = self.walls.at(ring, ns);
+                    let ns = s + dir * self.c.step;
+                    let (n, t) = self.c.walls.at(ring, ns);
                     let t = t * dir;
                     // the engagement at the step's end and at the contour's vertices on the way
-                    let corners = self.walls.between(ring, s, ns);
+                    let corners = self.c.walls.between(ring, s, ns);
                     let mut e = self.l.sim.front_engagement(n, z, t);
                     let mut prev = c;
                     for q in &corners {
@@ -955,7 +1021,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                         }
                         prev = *q;
                     }
-                    if e > self.theta + self.switch_slack() || (e > self.theta && self.turns_away(c, alpha, t)) {
+                    if e > self.c.theta + self.switch_slack() || (e > self.c.theta && self.turns_away(c, alpha, t)) {
                         // back to constant engagement when a step of it is possible; come back
                         // here later (§4.5)
                         let mut es = self.engage_step(c, alpha);
@@ -975,7 +1041,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                             }
                             // the material turns into the wall: keep to the wall while the
                             // engagement stays within the allowed overshoot
-                            _ if e <= self.theta + self.over => {}
+                            _ if e <= self.c.theta + self.c.over => {}
                             _ => {
                                 self.why = "contour too heavy and no way off the wall";
                                 break;
@@ -991,9 +1057,9 @@ impl<'a, 'b> Engine<'a, 'b> {
                     c = n;
                     alpha = t.y.atan2(t.x);
                     // air: nothing the tool must clear was removed by this step
-                    air = if self.l.sim.reach_left() == left { air + self.step } else { 0.0 };
-                    let walked = walked + self.step;
-                    if air > self.r || walked > self.walls.len(ring) + self.step {
+                    air = if self.l.sim.reach_left() == left { air + self.c.step } else { 0.0 };
+                    let walked = walked + self.c.step;
+                    if air > self.c.r || walked > self.c.walls.len(ring) + self.c.step {
                         self.why = "contour in air / complete";
                         break;
                     }
@@ -1010,7 +1076,7 @@ impl<'a, 'b> Engine<'a, 'b> {
     /// Cuts the model from the end of the pass to `to` and appends `to` to the pass.
     fn cut_to(&mut self, tr: &mut Trace, to: DVec2) {
         let from = *tr.pts.last().expect("a pass starts with its landing point");
-        let k = self.l.sim.cut_step_r(from, to, self.z, self.r_plan);
+        let k = self.l.sim.cut_step_r(from, to, self.z, self.c.r_plan);
         tr.pts.push(to);
         tr.rem.push(k as u32);
         if k > 0 {
@@ -1025,7 +1091,7 @@ impl<'a, 'b> Engine<'a, 'b> {
         let mut flags = std::mem::take(&mut self.flags);
         self.l.sim.ring_material(c, self.z, &mut flags);
         let ring = self.l.sim.ring();
-        let side = if self.climb { -1.0 } else { 1.0 };
+        let side = if self.c.climb { -1.0 } else { 1.0 };
         let mut score = [0usize; 2];
         for (k, dir) in [1.0, -1.0].into_iter().enumerate() {
             let d = t * dir;
@@ -1062,7 +1128,7 @@ impl<'a, 'b> Engine<'a, 'b> {
             let n = (len / self.l.sim.grid.res).ceil().max(1.0) as usize;
             let light = (1..=n).all(|k| {
                 let q = cur.truncate() + dir * (len * k as f64 / n as f64);
-                self.l.sim.front_engagement(q, z, dir) <= self.theta + STEP_SLACK_DEG
+                self.l.sim.front_engagement(q, z, dir) <= self.c.theta + STEP_SLACK_DEG
             });
             if light {
                 self.l.push_line(MoveKind::Cut, p.extend(z), self.l.feed);
@@ -1074,7 +1140,7 @@ impl<'a, 'b> Engine<'a, 'b> {
             return;
         }
         let top = self.l.top_near(p, self.landing_reach());
-        let h = (z + self.l.params.approach).max(if top.is_finite() { top + self.l.params.approach } else { z });
+        let h = (z + self.l.link.approach).max(if top.is_finite() { top + self.l.link.approach } else { z });
         self.l.travel(p, h);
         self.l.push_line(MoveKind::Descend, p.extend(z), self.l.feed);
     }
@@ -1082,7 +1148,7 @@ impl<'a, 'b> Engine<'a, 'b> {
     /// The whole step keeps its clearance from the walls (a step between two allowed points can
     /// cut the corner of a convex wall by up to Δ²/8ρ).
     fn step_allowed(&self, a: DVec2, b: DVec2) -> bool {
-        let need = self.r + self.margin;
+        let need = self.c.r + self.c.margin;
         let res = self.l.sim.grid.res;
         if self.dk_at(a).min(self.dk_at(b)) >= need + (b - a).length() + 2.0 * res {
             return true;
@@ -1091,7 +1157,7 @@ impl<'a, 'b> Engine<'a, 'b> {
     }
 
     fn segment_allowed(&self, a: DVec2, b: DVec2) -> bool {
-        self.l.sim.keep_distance(&Path::Line { a: a.extend(0.0), b: b.extend(0.0) }, self.r + 1.0) >= self.r
+        self.l.sim.keep_distance(&Path::Line { a: a.extend(0.0), b: b.extend(0.0) }, self.c.r + 1.0) >= self.c.r
     }
 
     /// Would eq. 9 lead away from the contour by more than the overshoot?
@@ -1099,7 +1165,7 @@ impl<'a, 'b> Engine<'a, 'b> {
         match self.direction(c, alpha) {
             Some(a) => {
                 let d = wrap_pi(a - t.y.atan2(t.x)).abs().to_degrees();
-                d > self.over && self.allowed(c + self.step * DVec2::new(a.cos(), a.sin()))
+                d > self.c.over && self.allowed(c + self.c.step * DVec2::new(a.cos(), a.sin()))
             }
             None => false,
         }
@@ -1116,7 +1182,7 @@ impl<'a, 'b> Engine<'a, 'b> {
             let h = self.l.sim.heights();
             let g = self.l.sim.grid;
             let thr = (self.z + 0.01) as f32;
-            for (k, off) in self.boost_ring.iter().enumerate() {
+            for (k, off) in self.c.boost_ring.iter().enumerate() {
                 flags[k] = g.cell_of(c + *off).is_some_and(|(i, j)| h[j * g.nx + i] > thr);
             }
             found = flags.iter().any(|f| *f);
@@ -1131,7 +1197,7 @@ impl<'a, 'b> Engine<'a, 'b> {
             // walk from the side where the material should be (the right for climb) toward
             // the front: the first engaged sample, then on while engaged; the last one is where
             // the circle leaves the material (eq. 8 / eq. 10)
-            let dir = if self.climb { 1i64 } else { -1i64 };
+            let dir = if self.c.climb { 1i64 } else { -1i64 };
             // (starting a little toward the front: the sampled circle, half a cell larger than the
             // tool, sees a sliver of the tool's own new wall right at its side)
             let side = alpha_p - dir as f64 * (FRAC_PI_2 - SIDE_SKIP.to_radians());
@@ -1159,7 +1225,7 @@ impl<'a, 'b> Engine<'a, 'b> {
             }
             let cross = (k.rem_euclid(m as i64) as f64 + 0.5) * step + dir as f64 * 0.5 * step;
             // turned away from the material by 90° − θ (eq. 9 / eq. 11)
-            Some(cross + dir as f64 * (FRAC_PI_2 - self.theta.to_radians()))
+            Some(cross + dir as f64 * (FRAC_PI_2 - self.c.theta.to_radians()))
         };
         self.flags = flags;
         res
@@ -1173,12 +1239,12 @@ impl<'a, 'b> Engine<'a, 'b> {
     /// the reference engagement and the material stays on the same side (the milling type is
     /// kept).
     fn engage_step(&mut self, c: DVec2, alpha_p: f64) -> EngageStep {
-        match self.engage_step_of(c, alpha_p, self.step) {
+        match self.engage_step_of(c, alpha_p, self.c.step) {
             // a full step runs into a wall: where the walls are close round the tool (a channel
             // barely wider than it), a shorter one lets it turn within the room it has — the
             // loops of trochoidal milling — before it gives up to contour milling
             EngageStep::Wall => match self.step_at(c) {
-                short if short < self.step => self.engage_step_of(c, alpha_p, short),
+                short if short < self.c.step => self.engage_step_of(c, alpha_p, short),
                 _ => EngageStep::Wall,
             },
             es => es,
@@ -1189,7 +1255,7 @@ impl<'a, 'b> Engine<'a, 'b> {
     fn engage_step_of(&mut self, c: DVec2, alpha_p: f64, step: f64) -> EngageStep {
         let Some(guess) = self.direction(c, alpha_p) else { return EngageStep::Done };
         // keep the heading within the front half of the previous direction
-        let toward = if self.climb { -1.0 } else { 1.0 };
+        let toward = if self.c.climb { -1.0 } else { 1.0 };
         let lim = FRAC_PI_2;
         let guess = alpha_p + wrap_pi(guess - alpha_p).clamp(-lim, lim);
         let eval = |me: &Self, a: f64| {
@@ -1198,15 +1264,15 @@ impl<'a, 'b> Engine<'a, 'b> {
         };
         let e0 = eval(self, guess);
         let mut alpha = guess;
-        if (e0 - self.theta).abs() > STEP_SLACK_DEG {
+        if (e0 - self.c.theta).abs() > STEP_SLACK_DEG {
             // the end of the front half that moves the error the right way
-            let end = if e0 > self.theta { alpha_p - toward * lim } else { alpha_p + toward * lim };
+            let end = if e0 > self.c.theta { alpha_p - toward * lim } else { alpha_p + toward * lim };
             let e1 = eval(self, end);
-            if (e0 > self.theta) == (e1 > self.theta) {
+            if (e0 > self.c.theta) == (e1 > self.c.theta) {
                 // saturated: turn as far as the front half allows — unless even that is too
                 // heavy, when the pass ends here (another start takes the material from a
                 // better side)
-                if e1 > self.theta + HEAVY_DEG {
+                if e1 > self.c.theta + HEAVY_DEG {
                     return EngageStep::Done;
                 }
                 alpha = end;
@@ -1216,7 +1282,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                 // readings where bisection took 7), until the end that does not exceed the
                 // reference reads within a pixel of it or the bracket is below 0.7°
                 let (mut lo, mut hi) = (guess, end);
-                let (mut flo, mut fhi) = (e0 - self.theta, e1 - self.theta);
+                let (mut flo, mut fhi) = (e0 - self.c.theta, e1 - self.c.theta);
                 let (mut wlo, mut whi) = (flo, fhi);
                 let mut last = 0i8;
                 for _ in 0..7 {
@@ -1225,7 +1291,7 @@ impl<'a, 'b> Engine<'a, 'b> {
                     }
                     let t = (wlo / (wlo - whi)).clamp(0.05, 0.95);
                     let mid = lo + (hi - lo) * t;
-                    let fm = eval(self, mid) - self.theta;
+                    let fm = eval(self, mid) - self.c.theta;
                     if (fm > 0.0) == (flo > 0.0) {
                         (lo, flo, wlo) = (mid, fm, fm);
                         if last == -1 {
@@ -1239,13 +1305,13 @@ impl<'a, 'b> Engine<'a, 'b> {
                         }
                         last = 1;
                     }
-                    let under = if e0 > self.theta { fhi } else { flo };
+                    let under = if e0 > self.c.theta { fhi } else { flo };
                     if under >= -SETTLE_DEG {
                         break;
                     }
                 }
                 // the side that does not exceed the reference
-                alpha = if e0 > self.theta { hi } else { lo };
+                alpha = if e0 > self.c.theta { hi } else { lo };
             }
         }
         let n = c + DVec2::new(alpha.cos(), alpha.sin()) * step;
@@ -1258,9 +1324,9 @@ impl<'a, 'b> Engine<'a, 'b> {
     /// The shorter step of constant engagement at `c`, where a full one (`0.1·D`) runs into a
     /// wall: half the room the tool has to the walls, down to a quarter step.
     fn step_at(&self, c: DVec2) -> f64 {
-        let room = self.dk_at(c) - self.r - self.margin;
-        let min = (0.25 * self.step).max(2.0 * self.l.sim.grid.res);
-        (0.5 * room).clamp(min.min(self.step), self.step)
+        let room = self.dk_at(c) - self.c.r - self.c.margin;
+        let min = (0.25 * self.c.step).max(2.0 * self.l.sim.grid.res);
+        (0.5 * room).clamp(min.min(self.c.step), self.c.step)
     }
 
     /// When the heading of eq. 9 runs into a wall: the heading nearest to it, turned away from
@@ -1269,7 +1335,7 @@ impl<'a, 'b> Engine<'a, 'b> {
     fn away_step(&mut self, c: DVec2, alpha_p: f64) -> Option<(DVec2, f64)> {
         let guess = self.direction(c, alpha_p)?;
         let guess = alpha_p + wrap_pi(guess - alpha_p).clamp(-FRAC_PI_2, FRAC_PI_2);
-        let away = if self.climb { 1.0 } else { -1.0 };
+        let away = if self.c.climb { 1.0 } else { -1.0 };
         let end = alpha_p + away * FRAC_PI_2;
         let span = wrap_pi(end - guess) * away;
         if span <= 0.0 {
@@ -1279,12 +1345,12 @@ impl<'a, 'b> Engine<'a, 'b> {
         for k in 1..=n_try {
             let a = guess + away * span * k as f64 / n_try as f64;
             let u = DVec2::new(a.cos(), a.sin());
-            let n = c + u * self.step;
+            let n = c + u * self.c.step;
             if !self.allowed(n) || !self.step_allowed(c, n) {
                 continue;
             }
             let e = self.l.sim.front_engagement(n, self.z, u);
-            if e <= self.theta + STEP_SLACK_DEG && e > AIR_DEG {
+            if e <= self.c.theta + STEP_SLACK_DEG && e > AIR_DEG {
                 return Some((n, a));
             }
         }
@@ -1300,8 +1366,8 @@ impl<'a, 'b> Engine<'a, 'b> {
         // the material model was cut step by step: do not cut it again
         self.l.precut = true;
         let base = self.l.feed;
-        let (res, d, boost) = (self.l.sim.grid.res, self.l.job.tool.diameter, self.l.params.feed_boost);
-        for (run, m) in feed_runs(pts, rem, res, self.r, d, boost) {
+        let (res, d, boost) = (self.l.sim.grid.res, self.l.job.cutting.tool.diameter, self.l.link.feed_boost);
+        for (run, m) in feed_runs(pts, rem, res, self.c.r, d, boost) {
             let simple = douglas_peucker(&run, DP_TOL);
             self.l.fit_emit_feed(&simple, z, MoveKind::Cut, base * m);
         }

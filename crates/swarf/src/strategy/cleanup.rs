@@ -7,9 +7,10 @@
 //! gets more level curves of the wall distance at half, quarter, … the stepover, clipped to near
 //! the leftovers, until nothing is left (or four refinements).
 
-use super::{LayerGeom, Params, Pass, PassKind};
+use super::AdaptiveOptions;
 use crate::geom::{Area, DVec2};
 use crate::model::REGION_TOL;
+use crate::plan::{LayerGeom, Pass, PassKind};
 
 /// Leftovers thinner than twice this (mm) are numerical slivers, not material.
 const SLIVER: f64 = 0.02;
@@ -48,14 +49,14 @@ pub fn leftover(g: &LayerGeom, passes: &[Pass]) -> Area {
 }
 
 /// Extra passes that clear what `existing` leaves.
-pub fn passes(g: &LayerGeom, params: &Params, existing: &[Pass]) -> Vec<Pass> {
+pub fn passes(g: &LayerGeom, climb: bool, existing: &[Pass]) -> Vec<Pass> {
     let mut out: Vec<Pass> = Vec::new();
     let mut left = leftover(g, existing);
     for refine in 1..=4 {
         if left.is_empty() {
             break;
         }
-        let new = level_curves(g, params, &left, g.step / f64::from(1u32 << refine));
+        let new = level_curves(g, climb, &left, g.step / f64::from(1u32 << refine));
         if new.is_empty() {
             break;
         }
@@ -74,19 +75,19 @@ pub fn passes(g: &LayerGeom, params: &Params, existing: &[Pass]) -> Vec<Pass> {
 /// joins at every vertex) would cost more than the rest of the planning. It is simplified
 /// within a cell first, and the zones it gives are grown by as much (they only say where the
 /// clean-up passes are clipped).
-pub fn passes_for_leftover(g: &LayerGeom, params: &Params, left: &Area, cell: f64) -> Vec<Pass> {
+pub fn passes_for_leftover(g: &LayerGeom, climb: bool, opts: &AdaptiveOptions, left: &Area, cell: f64) -> Vec<Pass> {
     let left = left.offset(-SLIVER, REGION_TOL).offset(SLIVER, REGION_TOL).intersection(left).without_slivers(0.01);
-    if left.is_empty() && !params.full_wall_contour {
+    if left.is_empty() && !opts.full_wall_contour {
         return Vec::new();
     }
     let left = left.simplified(cell);
     let mut out =
-        if left.is_empty() { Vec::new() } else { level_curves(g, params, &left.offset(cell, ZONE_TOL), g.step / 4.0) };
+        if left.is_empty() { Vec::new() } else { level_curves(g, climb, &left.offset(cell, ZONE_TOL), g.step / 4.0) };
     // the wall contour itself, last: what is left against the walls
     if !g.keep.is_empty() {
         // (the wall contour is the edge of the centres' region: clip by the leftover's reach
         // only, or the clipper may drop the contour as outside)
-        let zone = if params.full_wall_contour {
+        let zone = if opts.full_wall_contour {
             g.centres.offset(g.r + cell, ZONE_TOL)
         } else {
             left.offset(g.r + 0.01 + cell, ZONE_TOL)
@@ -106,20 +107,20 @@ pub fn passes_for_leftover(g: &LayerGeom, params: &Params, left: &Area, cell: f6
             .flat_map(|r| away_turns(r).into_iter())
             .map(|phi| (1.0 / (0.5 * phi).cos().max(0.1) - 1.0) * phi * g.r * 0.5)
             .sum();
-        let rho = if params.corner_fillets {
+        let rho = if opts.corner_fillets {
             (CORNER_ROUND * g.r).min(REST_BUDGET * g.reachable.area() / per_rho.max(1e-12))
         } else {
             0.0
         };
         let rings = round_corners(&g.walls, rho);
-        out.extend(super::offset::rings_passes(&rings, g.wall_level, &zone, params, true, PassKind::Cleanup));
+        out.extend(super::offset::rings_passes(&rings, g.wall_level, &zone, climb, true, PassKind::Cleanup));
     }
     out
 }
 
 /// Level curves of the wall distance (or of the stock outline without walls) at spacing
 /// `step`, clipped to where the tool touches `left`, farthest from the walls first.
-fn level_curves(g: &LayerGeom, params: &Params, left: &Area, step: f64) -> Vec<Pass> {
+fn level_curves(g: &LayerGeom, climb: bool, left: &Area, step: f64) -> Vec<Pass> {
     let zone = left.offset(g.r, ZONE_TOL).intersection(&g.centres);
     let mut new = Vec::new();
     {
@@ -155,7 +156,7 @@ fn level_curves(g: &LayerGeom, params: &Params, left: &Area, step: f64) -> Vec<P
                 if zone.difference(&grown).without_slivers(1e-6).is_empty() || k > 10_000 {
                     break;
                 }
-                new.extend(super::offset::ring_passes(&grown, level, &zone, params, true, PassKind::Cleanup));
+                new.extend(super::offset::ring_passes(&grown, level, &zone, climb, true, PassKind::Cleanup));
                 k += 1;
             }
         }

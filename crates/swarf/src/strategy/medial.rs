@@ -1,5 +1,5 @@
 //! C1 high-speed pocketing from the medial axis (paper 2, Elber, Cohen and Drake, and its
-//! planar predecessor MATHSM [8]).
+//! planar predecessor MATHSM \[8\]).
 //!
 //! The tool-centre region of a level (the pocket less its walls grown by the tool radius) has a
 //! medial axis ([`crate::geom::medial`]): at each of its points the largest circle that fits.
@@ -45,13 +45,13 @@
 //! Circles smaller than [`RHO_MIN`] are not cut (the tip of a branch into a sharp corner).
 //! Every arc is at most a half turn (G2/G3 with distinct ends).
 
+use super::{Clearing, Context};
 use crate::error::{Error, Result};
 use crate::geom::DVec2;
 use crate::geom::medial::{Axis, medial_axis};
-use crate::model::{Job, Regions};
-use crate::plan::Linker;
-use crate::plan::{LANDING_MARGIN, LayerGeom, Params, Pass};
-use crate::sim::SimOptions;
+use crate::model::Regions;
+use crate::plan::levels::{Levels, drive};
+use crate::plan::{LANDING_MARGIN, LayerGeom, Linker};
 use crate::sim::sweep::Path;
 use crate::toolpath::{MoveKind, Toolpath};
 use std::f64::consts::{PI, TAU};
@@ -375,42 +375,66 @@ pub fn region(regions: &Regions, geom: &LayerGeom) -> crate::geom::Area {
     geom.centres.intersection(&open)
 }
 
-/// Builds the program of a level job by the medial-axis strategy.
-pub fn link_medial(
-    job: &Job,
-    regions: &Regions,
-    geom: &LayerGeom,
-    params: &Params,
-    zs: &[f64],
-    finish: &[(f64, Vec<Pass>)],
-    sim_opts: &SimOptions,
-) -> Result<Toolpath> {
-    let axis =
-        medial_axis(&region(regions, geom), MIN_OBJECT_ANGLE).map_err(|e| Error::param("--strategy medial", e))?;
-    let runs = runs(&axis, geom.step, geom.r);
-    if std::env::var("SWARF_DEBUG").is_ok() {
-        eprintln!("medial axis: {} nodes, {} edges; {} runs", axis.nodes.len(), axis.edges.len(), runs.len());
-        for r in &runs {
-            let cs: Vec<String> =
-                r.circles.iter().map(|c| format!("({:.2},{:.2} r{:.2})", c.c.x, c.c.y, c.rho)).collect();
-            eprintln!("  run{}: {}", if r.from_hub { " from hub" } else { "" }, cs.join(" "));
+/// The medial strategy's options (paper 2).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MedialOptions {
+    /// Return from each circle's new arc to the next circle on a smaller, "cut back" turn
+    /// (paper 2 §2.1, Fig. 2c) instead of the circle's back half, which cuts nothing.
+    pub cut_back: bool,
+}
+
+impl MedialOptions {
+    /// Cut-back returns.
+    pub const DEFAULT: MedialOptions = MedialOptions { cut_back: true };
+}
+
+impl Default for MedialOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+impl Clearing for MedialOptions {
+    const NAME: &'static str = "medial";
+
+    fn plan(&self, cx: &Context) -> Result<Option<Toolpath>> {
+        let axis = medial_axis(&region(cx.regions, cx.geom), MIN_OBJECT_ANGLE)
+            .map_err(|e| Error::job("medial strategy", e))?;
+        let runs = runs(&axis, cx.geom.step, cx.geom.r);
+        if log::log_enabled!(log::Level::Debug) {
+            log::debug!("medial axis: {} nodes, {} edges; {} runs", axis.nodes.len(), axis.edges.len(), runs.len());
+            for r in &runs {
+                let cs: Vec<String> =
+                    r.circles.iter().map(|c| format!("({:.2},{:.2} r{:.2})", c.c.x, c.c.y, c.rho)).collect();
+                log::trace!("  run{}: {}", if r.from_hub { " from hub" } else { "" }, cs.join(" "));
+            }
         }
-    }
-    if runs.is_empty() {
-        return Err(Error::param("--strategy medial", "the tool fits nowhere in the pocket"));
-    }
-    let first = runs[0].circles[0].c;
-    let mut l = Linker::new(job, regions, params, sim_opts, first)?;
-    let n = zs.len();
-    for (i, z) in zs.iter().enumerate() {
-        l.tp.note(format!("level {} of {}: z {:.3}", i + 1, n, z));
-        l.down_at = None;
-        for run in &runs {
-            cut_run(&mut l, run, *z, geom.step);
+        if runs.is_empty() {
+            return Err(Error::job("medial strategy", "the tool fits nowhere in the pocket"));
         }
+        let mut levels = MedialLevels { runs: &runs, step: cx.geom.step, cut_back: self.cut_back };
+        drive(cx.job, cx.regions, cx.link, cx.sim, cx.zs, cx.finish, &mut levels).map(Some)
     }
-    l.finishing(finish);
-    Ok(l.finish())
+}
+
+/// The runs of circles, the same at every level.
+struct MedialLevels<'r> {
+    runs: &'r [Run],
+    step: f64,
+    cut_back: bool,
+}
+
+impl<'a> Levels<'a> for MedialLevels<'_> {
+    fn first(&self) -> DVec2 {
+        self.runs[0].circles[0].c
+    }
+
+    fn level(&mut self, l: &mut Linker<'a>, z: f64) -> Result<()> {
+        for run in self.runs {
+            cut_run(l, run, z, self.step, self.cut_back);
+        }
+        Ok(())
+    }
 }
 
 /// Cuts the arc of `k` from angle `a` through `total` (direction `s`) in pieces of at most a
@@ -476,8 +500,8 @@ fn cut_back(k: &Circle, a_e: f64, nk: &Circle, a_out: f64, s: f64) -> Option<(Ci
 }
 
 /// Cuts one run at level `z`.
-fn cut_run(l: &mut Linker, run: &Run, z: f64, step: f64) {
-    let s = if l.params.climb { 1.0 } else { -1.0 };
+fn cut_run(l: &mut Linker, run: &Run, z: f64, step: f64, cut_backs: bool) {
+    let s = if l.link.climb { 1.0 } else { -1.0 };
     let ks = &run.circles;
     if ks.is_empty() {
         return;
@@ -515,7 +539,7 @@ fn cut_run(l: &mut Linker, run: &Run, z: f64, step: f64) {
             (Some(nk), Some(nrm)) => {
                 let a_e = a_in + s * need;
                 let a_out = ang(nrm);
-                if l.params.medial_cut_back
+                if cut_backs
                     && let Some((q, a2)) = cut_back(&k, a_e, nk, a_out, s)
                     && l.keep_safe(on(&q, a2), on(nk, a2), z)
                 {
@@ -526,7 +550,7 @@ fn cut_run(l: &mut Linker, run: &Run, z: f64, step: f64) {
                     let turn = Path::Line { a: q.c.extend(z), b: q.c.extend(z) };
                     let bridge = Path::Line { a: on(&q, a2).extend(z), b: on(nk, a2).extend(z) };
                     let air = l.sim.is_clear(&turn, q.rho + 0.05) && l.sim.is_clear(&bridge, 0.05);
-                    let feed = if air { l.feed * l.params.feed_boost } else { l.feed };
+                    let feed = if air { l.feed * l.link.feed_boost } else { l.feed };
                     arc_at(l, &q, a_e, sweep(a_e, a2, s), s, z, feed);
                     l.push_line(MoveKind::Cut, on(nk, a2).extend(z), feed);
                     a_in = a2;
@@ -545,14 +569,14 @@ fn cut_run(l: &mut Linker, run: &Run, z: f64, step: f64) {
                 } else {
                     // the bridge would leave the pocket: the rest is a run of its own
                     let rest = Run { circles: ks[j..].to_vec(), from_hub: false };
-                    cut_run(l, &rest, z, step);
+                    cut_run(l, &rest, z, step, cut_backs);
                     return;
                 }
             }
             (Some(_), None) => {
                 arc(l, &k, a_in, need, s, z);
                 let rest = Run { circles: ks[j..].to_vec(), from_hub: false };
-                cut_run(l, &rest, z, step);
+                cut_run(l, &rest, z, step, cut_backs);
                 return;
             }
             (None, _) => {
@@ -599,7 +623,7 @@ fn arrive(l: &mut Linker, p: DVec2, z: f64) {
         }
     }
     let top = l.top_near(p, l.r + LANDING_MARGIN).max(z);
-    l.travel(p, top + l.params.approach);
+    l.travel(p, top + l.link.approach);
     l.push_line(MoveKind::Descend, p.extend(z), l.feed);
     l.down_at = Some(z);
 }
@@ -617,7 +641,7 @@ fn enter(l: &mut Linker, k: &Circle, z: f64, step: f64, s: f64) -> f64 {
         a0
     } else {
         let top = l.top_near(k.c, l.r + a + 0.05).max(z);
-        l.helix_down(k.c, a, top + l.params.approach, z, a0)
+        l.helix_down(k.c, a, top + l.link.approach, z, a0)
     };
     l.down_at = Some(z);
     // the spiral: semicircles round c and c + δ·e(φ) alternately, each half a turn wider

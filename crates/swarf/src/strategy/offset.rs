@@ -10,18 +10,57 @@
 //! right. Inside-out order cuts toward the walls, so the walls are kept on the right;
 //! outside-in cuts away from them, so they are kept on the left. Conventional is the reverse.
 
-use super::{LayerGeom, OffsetOrder, Params, Pass, PassKind};
+use super::{Clearing, Context};
+use crate::error::Result;
 use crate::geom::{Area, DVec2};
 use crate::model::REGION_TOL;
+use crate::plan::{LayerGeom, Pass, PassKind};
+use crate::toolpath::Toolpath;
+
+/// Order of contour-parallel passes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OffsetOrder {
+    /// From the farthest pass toward the walls (pocket centre first, walls last; on an open
+    /// side, from the free edge of the stock toward the part).
+    InsideOut,
+    /// From the walls outward (the wall pass first).
+    OutsideIn,
+}
+
+/// The offset strategy's options.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OffsetOptions {
+    /// Order of the passes.
+    pub order: OffsetOrder,
+}
+
+impl OffsetOptions {
+    /// Inside-out.
+    pub const DEFAULT: OffsetOptions = OffsetOptions { order: OffsetOrder::InsideOut };
+}
+
+impl Default for OffsetOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+impl Clearing for OffsetOptions {
+    const NAME: &'static str = "offset";
+
+    fn plan(&self, cx: &Context) -> Result<Option<Toolpath>> {
+        super::same_passes(cx, passes(cx.geom, cx.link.climb, self.order))
+    }
+}
 
 /// Tolerance of the simplification between grown levels (mm). Levels past the wall contour are
 /// at least a stepover from the walls, so this only moves them by micrometres.
 pub const GROW_SIMPLIFY: f64 = 0.002;
 
-/// Offset passes for one level.
-pub fn passes(g: &LayerGeom, params: &Params) -> Vec<Pass> {
+/// Offset passes for one level, for climb milling or conventional, in `order`.
+pub fn passes(g: &LayerGeom, climb: bool, order: OffsetOrder) -> Vec<Pass> {
     let mut out = Vec::new();
-    let inside_out = params.offset_order == OffsetOrder::InsideOut;
+    let inside_out = order == OffsetOrder::InsideOut;
     if g.keep.is_empty() {
         // facing: offsets of the material outline inward, from just touching outside
         let mut k = 0usize;
@@ -34,7 +73,7 @@ pub fn passes(g: &LayerGeom, params: &Params) -> Vec<Pass> {
                 let mut pts = ring.clone();
                 // rings of an area have it on their left; material is inside (left) for
                 // outside-in: climb wants it on the right
-                if params.climb == crate::plan::pass::ccw(&pts) {
+                if climb == crate::plan::pass::ccw(&pts) {
                     pts.reverse();
                 }
                 out.push(Pass { pts, closed: true, kind: PassKind::Clear, level: -(k as f64), reversible: false });
@@ -57,7 +96,7 @@ pub fn passes(g: &LayerGeom, params: &Params) -> Vec<Pass> {
             grown = grown.simplified(GROW_SIMPLIFY).offset(g.step, REGION_TOL);
         }
         let kind = if k == 0 { PassKind::Contour } else { PassKind::Clear };
-        let ps = ring_passes(&grown, level, &g.touch, params, inside_out, kind);
+        let ps = ring_passes(&grown, level, &g.touch, climb, inside_out, kind);
         if ps.is_empty() && (g.touch.difference(&grown).without_slivers(1e-6).is_empty() || k > 100_000) {
             // the grown walls cover everything the tool could touch
             break;
@@ -192,11 +231,11 @@ pub fn level_passes(
     keep: &Area,
     level: f64,
     touch: &Area,
-    params: &Params,
+    climb: bool,
     toward_walls: bool,
     kind: PassKind,
 ) -> Vec<Pass> {
-    ring_passes(&keep.offset(level, REGION_TOL), level, touch, params, toward_walls, kind)
+    ring_passes(&keep.offset(level, REGION_TOL), level, touch, climb, toward_walls, kind)
 }
 
 /// The passes along the rings of `grown` (the walls grown by `level`), clipped to `touch`.
@@ -204,12 +243,12 @@ pub fn ring_passes(
     grown: &Area,
     level: f64,
     touch: &Area,
-    params: &Params,
+    climb: bool,
     toward_walls: bool,
     kind: PassKind,
 ) -> Vec<Pass> {
     let rings: Vec<Vec<DVec2>> = grown.rings().cloned().collect();
-    rings_passes(&rings, level, touch, params, toward_walls, kind)
+    rings_passes(&rings, level, touch, climb, toward_walls, kind)
 }
 
 /// [`ring_passes`] along given rings (the walls on their left).
@@ -217,7 +256,7 @@ pub fn rings_passes(
     rings: &[Vec<DVec2>],
     level: f64,
     touch: &Area,
-    params: &Params,
+    climb: bool,
     toward_walls: bool,
     kind: PassKind,
 ) -> Vec<Pass> {
@@ -226,7 +265,7 @@ pub fn rings_passes(
         // rings of the grown walls have the walls on their left; cutting toward the walls
         // (inside-out) with climb wants them on the right
         let mut pts = ring.clone();
-        let reverse = params.climb == toward_walls;
+        let reverse = climb == toward_walls;
         if reverse {
             pts.reverse();
         }

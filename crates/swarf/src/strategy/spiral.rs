@@ -33,28 +33,28 @@
 //! from what the material model says is left. A job whose tool-centre region falls apart (a
 //! pocket with narrow necks) gets one spiral per piece, each with its entry.
 //!
-//! The region's own `f` is scaled down with the distance from the start ([`Shaped`]), so that no
+//! The region's own `f` is scaled down with the distance from the start (`Shaped`), so that no
 //! level runs the length of a long leg at once (a ridge of `f`).
 //!
 //! **The floor.** Where a level curves tightly the engagement limit asks for a small gap; it
 //! is never asked below a floor (a fraction of the stepover), or every turn of a level with a
 //! sharp tip would crawl. A wide floor is fast and engages the tool more in tight turns.
-//! Unless a floor or a constant ζ is given, [`super::spiral_search::optimise_spiral`] chooses it:
+//! Unless a floor or a constant ζ is given, the spiral search (`optimise_spiral`) chooses it:
 //! the loop of §4, Figs. 8–9, which plans a spiral for each candidate (floors, and with
 //! `--optimise` start points), simulates them fastest first, and keeps the first that clears
 //! the pocket within the engagement bound.
 
+use super::{AdaptiveOptions, Context};
 use crate::error::{Error, Result};
 use crate::geom::arcfit::Piece;
 use crate::geom::{Area, DVec2, biarc};
 use crate::implicit::levels::Grid;
-use crate::implicit::oscillator::{Damping, EngagementLimit, Spiral, SpiralOptions, Turn, spiral};
+use crate::implicit::oscillator::{self, Damping, EngagementLimit, Spiral, Turn, spiral};
 use crate::implicit::region::AreaField;
 use crate::implicit::shape::{Field, maximum};
 use crate::model::{Job, Regions};
-use crate::plan::Linker;
-use crate::plan::{LayerGeom, Params, Pass};
-use crate::sim::SimOptions;
+use crate::plan::levels::{Levels, drive};
+use crate::plan::{LayerGeom, LinkOptions, Linker};
 use crate::toolpath::{MoveKind, Toolpath};
 use std::f64::consts::TAU;
 
@@ -85,8 +85,41 @@ pub const CORNER_CUT: f64 = 0.02;
 /// [`EngagementLimit::floor`]). Where levels turn tighter than the floor allows (the hairpin
 /// tips of the levels creeping along an L's legs, the levels near a polygon's corners) the
 /// engagement rises above the reference; a `rough` job chooses the floor among [`FLOORS`] by
-/// simulation unless one is given ([`super::spiral_search::optimise_spiral`]).
+/// simulation unless one is given (the spiral search (`optimise_spiral`)).
 pub const ENGAGEMENT_FLOOR: f64 = 0.35;
+
+/// The spiral strategy's options (paper 4).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpiralOptions {
+    /// A constant damping ζ (eq. 6) in (0, 1] instead of ζ chosen per level for the stepover and
+    /// the engagement.
+    pub zeta: Option<f64>,
+    /// Start here instead of at the maximum of the region's implicit function.
+    pub start: Option<DVec2>,
+    /// With ζ per level: the least gap between turns the engagement limit may ask for where
+    /// turns curve tightly, as a fraction of the stepover in (0, 1]
+    /// ([`EngagementLimit::floor`]); `None` tries [`FLOORS`] and keeps the fastest within the
+    /// engagement bound (the spiral search (`optimise_spiral`)).
+    pub floor: Option<f64>,
+    /// Also try four other start points round the maximum of f (paper 4 §4, Figs. 8–9); the
+    /// floor is chosen by simulation unless `floor` or `zeta` is set.
+    pub optimise: bool,
+    /// The adaptive passes that clear round islands (a pocket with islands gets a spiral over
+    /// its island-free core only).
+    pub adaptive: AdaptiveOptions,
+}
+
+impl SpiralOptions {
+    /// ζ per level, the floor chosen by simulation, from the maximum of f.
+    pub const DEFAULT: SpiralOptions =
+        SpiralOptions { zeta: None, start: None, floor: None, optimise: false, adaptive: AdaptiveOptions::DEFAULT };
+}
+
+impl Default for SpiralOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
 
 /// How a spiral is made: the damping and the start.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -126,7 +159,7 @@ pub fn plan_pieces(
     job: &Job,
     regions: &Regions,
     geom: &LayerGeom,
-    params: &Params,
+    link: &LinkOptions,
     choice: &SpiralChoice,
 ) -> Result<(Vec<PiecePath>, bool)> {
     let region = super::medial::region(regions, geom);
@@ -135,12 +168,12 @@ pub fn plan_pieces(
     for piece in region.components() {
         let holes = piece.polys.iter().any(|p| !p.holes.is_empty());
         islands |= holes;
-        if let Some(p) = plan_piece(job, &piece, geom, params, choice, holes)? {
+        if let Some(p) = plan_piece(job, &piece, geom, link, choice, holes)? {
             out.push(p);
         }
     }
     if out.is_empty() && !islands {
-        return Err(Error::param("--strategy spiral", "the tool fits nowhere in the pocket"));
+        return Err(Error::job("spiral strategy", "the tool fits nowhere in the pocket"));
     }
     Ok((out, islands))
 }
@@ -253,7 +286,7 @@ impl Field for Shaped<'_> {
     }
 }
 
-/// The length ℓ of [`Shaped`], in units of the largest value of the region's `f` (the
+/// The length ℓ of `Shaped`, in units of the largest value of the region's `f` (the
 /// largest inscribed radius).
 pub const SHAPE_LENGTH: f64 = 1.0;
 
@@ -261,7 +294,7 @@ fn plan_piece(
     job: &Job,
     piece: &Area,
     geom: &LayerGeom,
-    params: &Params,
+    link: &LinkOptions,
     choice: &SpiralChoice,
     islands: bool,
 ) -> Result<Option<PiecePath>> {
@@ -292,9 +325,9 @@ fn plan_piece(
         return Ok(None);
     }
     let r = geom.r;
-    let theta = job.width.engagement_deg().to_radians();
-    let opts = SpiralOptions {
-        turn: if params.climb { Turn::Ccw } else { Turn::Cw },
+    let theta = job.cutting.width.engagement_deg().to_radians();
+    let opts = oscillator::SpiralOptions {
+        turn: if link.climb { Turn::Ccw } else { Turn::Cw },
         damping: match choice.zeta {
             Some(z) => Damping::Constant(z),
             None => Damping::stepover(geom.step),
@@ -312,55 +345,54 @@ fn plan_piece(
         Ok(sp) => sp,
         // (with islands the adaptive passes clear what a spiral cannot)
         Err(_) if islands => return Ok(None),
-        Err(Error::Param { reason, .. }) => return Err(Error::param("--strategy spiral", reason)),
+        Err(Error::Job { reason, .. }) => return Err(Error::job("spiral strategy", reason)),
         Err(e) => return Err(e),
     };
     // the helix: at most half the tool radius, inside the region
-    let helix_r = (params.helix_radius_frac * r).min(0.5 * r).min(0.8 * (f0 - f_end));
+    let helix_r = (link.helix_radius_frac * r).min(0.5 * r).min(0.8 * (f0 - f_end));
     let join = sp.points.iter().position(|q| (q.p - start).length() >= helix_r).unwrap_or(sp.points.len() - 1);
     Ok(Some(PiecePath { start, helix_r, spiral: sp, join }))
 }
 
-/// Builds the program of a level job from its spirals.
-#[allow(clippy::too_many_arguments)]
-pub fn link_spiral(
-    job: &Job,
-    regions: &Regions,
-    geom: &LayerGeom,
-    params: &Params,
-    zs: &[f64],
-    finish: &[(f64, Vec<Pass>)],
-    sim_opts: &SimOptions,
-    choice: &SpiralChoice,
-) -> Result<Toolpath> {
-    let (pieces, islands) = plan_pieces(job, regions, geom, params, choice)?;
-    let first = pieces.first().map_or_else(|| geom.centres.bounds().map_or(DVec2::ZERO, |(lo, _)| lo), |p| p.start);
-    let mut l = Linker::new(job, regions, params, sim_opts, first)?;
+/// Builds the program of a level job from its spirals (with the adaptive passes of `adaptive`
+/// round islands).
+pub(crate) fn link_spiral(cx: &Context, adaptive: &AdaptiveOptions, choice: &SpiralChoice) -> Result<Toolpath> {
+    let (pieces, islands) = plan_pieces(cx.job, cx.regions, cx.geom, cx.link, choice)?;
+    let first = pieces.first().map_or_else(|| cx.geom.centres.bounds().map_or(DVec2::ZERO, |(lo, _)| lo), |p| p.start);
     if islands {
-        super::adaptive::adaptive_levels(&mut l, job, geom, params, zs, &mut |l, z| {
+        let mut levels = super::adaptive::AdaptiveLevels::new(cx, adaptive, first, |l: &mut Linker, z| {
             l.tp.note("spiral over the island-free core; adaptive passes for the rest");
             for p in &pieces {
                 cut_piece(l, p, z);
             }
         });
-        l.finishing(finish);
-        return Ok(l.finish());
+        return drive(cx.job, cx.regions, cx.link, cx.sim, cx.zs, cx.finish, &mut levels);
     }
-    let n = zs.len();
-    for (i, z) in zs.iter().enumerate() {
-        l.tp.note(format!("level {} of {}: z {:.3}", i + 1, n, z));
-        l.down_at = None;
-        for p in &pieces {
-            cut_piece(&mut l, p, *z);
+    drive(cx.job, cx.regions, cx.link, cx.sim, cx.zs, cx.finish, &mut SpiralLevels { pieces: &pieces, first })
+}
+
+/// The spirals of the pieces, the same at every level.
+struct SpiralLevels<'p> {
+    pieces: &'p [PiecePath],
+    first: DVec2,
+}
+
+impl<'a> Levels<'a> for SpiralLevels<'_> {
+    fn first(&self) -> DVec2 {
+        self.first
+    }
+
+    fn level(&mut self, l: &mut Linker<'a>, z: f64) -> Result<()> {
+        for p in self.pieces {
+            cut_piece(l, p, z);
         }
+        Ok(())
     }
-    l.finishing(finish);
-    Ok(l.finish())
 }
 
 /// Enters at the piece's start and cuts its spiral at `z`.
 fn cut_piece(l: &mut Linker, p: &PiecePath, z: f64) {
-    let s = if l.params.climb { 1.0 } else { -1.0 };
+    let s = if l.link.climb { 1.0 } else { -1.0 };
     // points closer than MIN_POINT_GAP to the one before are dropped (the last one is kept
     // and its predecessor dropped instead): a biarc between two such points is a few µm
     // long, and once written to 1 µm its ends point anywhere
@@ -387,9 +419,9 @@ fn cut_piece(l: &mut Linker, p: &PiecePath, z: f64) {
     let k = k.min(pts.len() - 1);
     let target = pts[k];
     // the helix ends a sixth of a turn before the angle of the join point
-    let pitch = TAU * p.helix_r * l.params.ramp_angle_deg.to_radians().tan();
+    let pitch = TAU * p.helix_r * l.link.ramp_angle_deg.to_radians().tan();
     let top = l.top_near(p.start, l.r + p.helix_r + 0.05).max(z);
-    let z_from = top + l.params.approach;
+    let z_from = top + l.link.approach;
     let total = TAU * ((z_from - z) / pitch.max(1e-6));
     let a_join = (target - p.start).y.atan2((target - p.start).x);
     let a_end_want = a_join - s * TAU / 6.0;
@@ -405,7 +437,7 @@ fn cut_piece(l: &mut Linker, p: &PiecePath, z: f64) {
         None => pieces.push(Piece::Line { to: target }),
     }
     let tol = biarc::Tolerance {
-        tol: l.params.arc_tol,
+        tol: l.link.arc_tol,
         min_len: MIN_ARC,
         loose: CORNER_CUT,
         // the biarcs may cut a bend inwards (towards the start), never outwards
@@ -421,7 +453,7 @@ fn cut_piece(l: &mut Linker, p: &PiecePath, z: f64) {
     }
 }
 
-/// One candidate of [`super::spiral_search::optimise_spiral`] and what was found out about it.
+/// One candidate of the spiral search (`optimise_spiral`) and what was found out about it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Trial {
     /// The choice.
@@ -456,11 +488,11 @@ impl Trial {
 /// The floors ([`SpiralChoice::floor`]) the optimiser tries, widest first.
 pub const FLOORS: [f64; 6] = [0.5, 0.42, 0.35, 0.28, 0.22, 0.16];
 
-/// The candidates [`super::spiral_search::optimise_spiral`] tries: ζ per level with each of
+/// The candidates the spiral search (`optimise_spiral`) tries: ζ per level with each of
 /// [`FLOORS`], from `start` (`None`: the maximum of `f`), and with `around` also from four
 /// points round the maximum (a third of the way to the boundary). (A constant ζ is not among
 /// them: where it keeps the engagement it is slower than ζ per level on every case measured,
-/// see [`super::spiral_search::best_fixed_zeta`].)
+/// see `best_fixed_zeta`.)
 pub fn candidates(
     regions: &Regions,
     geom: &LayerGeom,
@@ -471,7 +503,7 @@ pub fn candidates(
     if around {
         let region = super::medial::region(regions, geom);
         let Some(piece) = region.components().into_iter().max_by(|a, b| a.area().total_cmp(&b.area())) else {
-            return Err(Error::param("--strategy spiral", "the tool fits nowhere in the pocket"));
+            return Err(Error::job("spiral strategy", "the tool fits nowhere in the pocket"));
         };
         let field = AreaField::new(&piece);
         let (lo, hi) = field.bounds().unwrap_or_default();

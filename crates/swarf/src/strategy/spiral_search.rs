@@ -2,36 +2,58 @@
 //! planned, the fastest simulated first, the first that clears the pocket within the
 //! engagement bound kept; and the baseline of the docs' table, the best constant ζ.
 
-use super::spiral::{ENGAGEMENT_FLOOR, SpiralChoice, Trial, TrialSim, candidates, link_spiral};
-use crate::error::{Error, Result};
+use super::spiral::{ENGAGEMENT_FLOOR, SpiralChoice, SpiralOptions, Trial, TrialSim, candidates, link_spiral};
+use super::{Clearing, Context, Strategy};
+use crate::error::{Error, Result, Setting};
 use crate::model::{Job, Regions};
-use crate::plan::{LayerGeom, Params, Pass, wall_margin};
+use crate::plan::{LayerGeom, LinkOptions};
 use crate::post;
 use crate::report::{self, Report};
 use crate::sim::SimOptions;
 use crate::toolpath::Toolpath;
 
-/// The spiral program of a level job: the choice of [`optimise_spiral`] unless the parameters
+// (the spiral's options are in `spiral.rs`; what they do as a strategy is the search's)
+impl Clearing for SpiralOptions {
+    const NAME: &'static str = "spiral";
+
+    fn validate(&self) -> Result<()> {
+        if let Some(z) = self.zeta
+            && !(z.is_finite() && z > 0.0 && z <= 1.0)
+        {
+            return Err(Error::setting(Setting::Zeta, format!("{z}: ζ must be in (0, 1]")));
+        }
+        if let Some(f) = self.floor
+            && !(f.is_finite() && f > 0.0 && f <= 1.0)
+        {
+            return Err(Error::setting(Setting::SpiralFloor, format!("{f}: the floor must be in (0, 1]")));
+        }
+        if let Some(p) = self.start
+            && !p.is_finite()
+        {
+            return Err(Error::setting(Setting::SpiralStart, format!("{p}: must be a point of finite numbers")));
+        }
+        self.adaptive.validate()
+    }
+
+    /// A spiral over a pocket with islands leaves the rest to adaptive passes.
+    fn wall_slack(&self) -> f64 {
+        self.adaptive.wall_slack()
+    }
+
+    fn plan(&self, cx: &Context) -> Result<Option<Toolpath>> {
+        plan_spiral(cx, self).map(Some)
+    }
+}
+
+/// The spiral program of a level job: the choice of `optimise_spiral` unless the options
 /// pin ζ or the floor; when no candidate was feasible, the program says so in a note at its start.
-#[allow(clippy::too_many_arguments)]
-pub fn plan_spiral(
-    job: &Job,
-    regions: &Regions,
-    geom: &LayerGeom,
-    params: &Params,
-    zs: &[f64],
-    finish: &[(f64, Vec<Pass>)],
-    sim: &SimOptions,
-) -> Result<Toolpath> {
-    let debug = std::env::var("SWARF_DEBUG").is_ok();
+pub(crate) fn plan_spiral(cx: &Context, opts: &SpiralOptions) -> Result<Toolpath> {
     let mut missed = None;
-    let (choice, planned) = match (params.spiral_zeta, params.spiral_floor) {
+    let (choice, planned) = match (opts.zeta, opts.floor) {
         (None, None) => {
-            let (best, trials, planned) = optimise_spiral_planned(job, regions, geom, params, sim, zs)?;
-            if debug {
-                for t in &trials {
-                    eprintln!("spiral trial {t:?}");
-                }
+            let (best, trials, planned) = optimise_spiral_planned(cx, opts)?;
+            for t in &trials {
+                log::debug!("spiral trial {t:?}");
             }
             if let Some(t) = trials.iter().find(|t| t.choice == best)
                 && let Some(sim) = t.sim.filter(|s| !s.feasible)
@@ -44,20 +66,18 @@ pub fn plan_spiral(
                     sim.gouges,
                     100.0 * sim.rest,
                     sim.p99_deg,
-                    spiral_bound(job)
+                    spiral_bound(cx.job)
                 ));
             }
             (best, planned)
         }
-        (zeta, floor) => {
-            (SpiralChoice { zeta, start: params.spiral_start, floor: floor.unwrap_or(ENGAGEMENT_FLOOR) }, None)
-        }
+        (zeta, floor) => (SpiralChoice { zeta, start: opts.start, floor: floor.unwrap_or(ENGAGEMENT_FLOOR) }, None),
     };
     // the optimiser's program of the choice is the one wanted, unless finishing passes
     // follow it
     let mut tp = match planned {
-        Some(tp) if finish.is_empty() => tp,
-        _ => link_spiral(job, regions, geom, params, zs, finish, sim, &choice)?,
+        Some(tp) if cx.finish.is_empty() => tp,
+        _ => link_spiral(cx, &opts.adaptive, &choice)?,
     };
     if let Some(text) = missed {
         tp.notes.insert(0, crate::toolpath::Note { at: 0, text });
@@ -66,10 +86,10 @@ pub fn plan_spiral(
 }
 
 /// The loop of paper 4 §4 (Figs. 8–9): chooses ζ (per level, through the floor of the gaps
-/// where turns are tight) and, with `params.spiral_optimise`, the start point of a spiral
+/// where turns are tight) and, with [`SpiralOptions::optimise`], the start point of a spiral
 /// to minimise machining time subject to full clearing (rest ≤ 0.5 % of the reachable area, no
 /// gouge) and the engagement bound (p99 outside the entry ≤ the reference + 10°), as swarf's
-/// simulator (`sim`) judges them.
+/// simulator (`cx.sim`) judges them (`cx.finish` is not used).
 ///
 /// Every candidate of [`candidates`] is planned (quick), and its time is read off
 /// its program. Simulation (the slow part) is spent only where it can change the answer: the
@@ -78,41 +98,26 @@ pub fn plan_spiral(
 /// from the others: the engagement depends on the damping far more than on the start. At most
 /// [`MAX_SIMULATED`] are simulated; when none of those is feasible, the one that misses by
 /// least is returned (fewest gouges, then least rest beyond the limit, then least engagement
-/// beyond the bound), and [`plan`] says so in the program. Returns the choice and every
+/// beyond the bound), and the program says so. Returns the choice and every
 /// trial.
-pub fn optimise_spiral(
-    job: &Job,
-    regions: &Regions,
-    geom: &LayerGeom,
-    params: &Params,
-    sim: &SimOptions,
-    zs: &[f64],
-) -> Result<(SpiralChoice, Vec<Trial>)> {
-    optimise_spiral_planned(job, regions, geom, params, sim, zs).map(|(choice, trials, _)| (choice, trials))
+pub(crate) fn optimise_spiral(cx: &Context, opts: &SpiralOptions) -> Result<(SpiralChoice, Vec<Trial>)> {
+    optimise_spiral_planned(cx, opts).map(|(choice, trials, _)| (choice, trials))
 }
 
-/// [`optimise_spiral`], with the program of the choice as planned (without finishing passes).
-fn optimise_spiral_planned(
-    job: &Job,
-    regions: &Regions,
-    geom: &LayerGeom,
-    params: &Params,
-    sim: &SimOptions,
-    zs: &[f64],
-) -> Result<(SpiralChoice, Vec<Trial>, Option<Toolpath>)> {
-    use Trial;
+/// `optimise_spiral`, with the program of the choice as planned (without finishing passes).
+fn optimise_spiral_planned(cx: &Context, opts: &SpiralOptions) -> Result<(SpiralChoice, Vec<Trial>, Option<Toolpath>)> {
     use rayon::prelude::*;
+    let job = cx.job;
     let bound = spiral_bound(job);
-    let p = params;
-    let candidates = candidates(regions, geom, p.spiral_start, p.spiral_optimise)?;
+    let candidates = candidates(cx.regions, cx.geom, opts.start, opts.optimise)?;
     let mut planned: Vec<Option<(Toolpath, Toolpath)>> =
-        candidates.par_iter().map(|c| plan_spiral_trial(job, regions, geom, params, sim, zs, c)).collect();
+        candidates.par_iter().map(|c| plan_spiral_trial(cx, opts, c)).collect();
     let mut trials: Vec<Trial> = candidates
         .iter()
         .zip(&planned)
         .map(|(c, tp)| Trial {
             choice: *c,
-            time_min: tp.as_ref().map(|(_, written)| written.totals(job.rapid_rate).time_min),
+            time_min: tp.as_ref().map(|(_, written)| written.totals(job.cutting.rapid_rate).time_min),
             sim: None,
         })
         .collect();
@@ -132,7 +137,7 @@ fn optimise_spiral_planned(
         }
         let Some((_, tp)) = &planned[i] else { continue };
         simulated += 1;
-        let sim = judge_spiral(job, regions, sim, tp)?;
+        let sim = judge_spiral(job, cx.regions, cx.sim, tp)?;
         trials[i].sim = Some(sim);
         if sim.feasible {
             best = Some(i);
@@ -141,7 +146,7 @@ fn optimise_spiral_planned(
     }
     let best = best
         .or_else(|| nearest_miss(&trials, bound))
-        .ok_or_else(|| Error::param("--strategy spiral", "no spiral could be made from any start or ζ"))?;
+        .ok_or_else(|| Error::job("spiral strategy", "no spiral could be made from any start or ζ"))?;
     Ok((trials[best].choice, trials, planned.swap_remove(best).map(|(tp, _)| tp)))
 }
 
@@ -157,38 +162,49 @@ fn nearest_miss(trials: &[Trial], bound: f64) -> Option<usize> {
         .map(|(i, _)| i)
 }
 
-/// [`optimise_spiral`] on a whole job (its regions, layer geometry and levels as [`plan`]
-/// makes them).
-pub fn optimise_spiral_job(job: &Job, params: &Params, sim: &SimOptions) -> Result<(SpiralChoice, Vec<Trial>)> {
-    let regions = job.regions(job.radius(), wall_margin(params))?;
-    let geom = LayerGeom::new(job, &regions, params)?;
-    optimise_spiral(job, &regions, &geom, params, sim, &job.levels())
+/// `optimise_spiral` on a whole job (its regions, layer geometry and levels as
+/// [`crate::job::rough::plan`] makes them).
+pub fn optimise_spiral_job(
+    job: &Job,
+    opts: &SpiralOptions,
+    link: &LinkOptions,
+    sim: &SimOptions,
+) -> Result<(SpiralChoice, Vec<Trial>)> {
+    on_job(job, opts, link, sim, |cx| optimise_spiral(cx, opts))
 }
 
-/// The most candidates [`optimise_spiral`] simulates.
+/// Calls `f` with the context of a whole job planned with `opts`.
+fn on_job<T>(
+    job: &Job,
+    opts: &SpiralOptions,
+    link: &LinkOptions,
+    sim: &SimOptions,
+    f: impl FnOnce(&Context) -> Result<T>,
+) -> Result<T> {
+    let margin = Strategy::Spiral(opts.clone()).wall_margin(link);
+    let regions = job.regions(job.radius(), margin)?;
+    let geom = LayerGeom::new(job, &regions, link, margin)?;
+    let zs = job.levels();
+    f(&Context { job, regions: &regions, geom: &geom, link, sim, zs: &zs, finish: &[] })
+}
+
+/// The most candidates `optimise_spiral` simulates.
 pub const MAX_SIMULATED: usize = 8;
 
-/// The most rest [`optimise_spiral`] accepts, as a share of the reachable area.
+/// The most rest `optimise_spiral` accepts, as a share of the reachable area.
 pub const REST_LIMIT: f64 = 0.005;
 
-/// The most p99 engagement outside the entry [`optimise_spiral`] accepts: the job's reference
+/// The most p99 engagement outside the entry `optimise_spiral` accepts: the job's reference
 /// + 10°.
 fn spiral_bound(job: &Job) -> f64 {
-    job.width.engagement_deg() + 10.0
+    job.cutting.width.engagement_deg() + 10.0
 }
 
 /// The program of one spiral candidate as planned and as it will be written (quantised), or
 /// `None` where the spiral cannot be made.
-fn plan_spiral_trial(
-    job: &Job,
-    regions: &Regions,
-    geom: &LayerGeom,
-    params: &Params,
-    sim: &SimOptions,
-    zs: &[f64],
-    choice: &SpiralChoice,
-) -> Option<(Toolpath, Toolpath)> {
-    let tp = link_spiral(job, regions, geom, params, zs, &[], sim, choice).ok()?;
+fn plan_spiral_trial(cx: &Context, opts: &SpiralOptions, choice: &SpiralChoice) -> Option<(Toolpath, Toolpath)> {
+    let trial = Context { finish: &[], ..*cx };
+    let tp = link_spiral(&trial, &opts.adaptive, choice).ok()?;
     let mut written = tp.clone();
     written.quantize(post::COORD_STEP, post::CENTER_STEP);
     Some((tp, written))
@@ -198,7 +214,7 @@ fn plan_spiral_trial(
 fn judge_spiral(job: &Job, regions: &Regions, sim: &SimOptions, tp: &Toolpath) -> Result<TrialSim> {
     let (rp, rest) = crate::sim::simulate(job, regions, sim, tp, &mut |_| {})?;
     let mut rep = Report::default();
-    report::fill(&mut rep, tp, &rp, &rest, job.rapid_rate);
+    report::fill(&mut rep, tp, &rp, &rest, job.cutting.rapid_rate);
     let bound = spiral_bound(job);
     Ok(TrialSim {
         gouges: rep.gouges,
@@ -211,29 +227,28 @@ fn judge_spiral(job: &Job, regions: &Regions, sim: &SimOptions, tp: &Toolpath) -
 /// What [`spiral_study`] measured of one job.
 #[derive(Debug, Clone)]
 pub struct SpiralStudy {
-    /// The default of `rough`: the floor chosen from the maximum of f ([`optimise_spiral`]
+    /// The default of `rough`: the floor chosen from the maximum of f (`optimise_spiral`
     /// without other starts), and its trials.
     pub default: (SpiralChoice, Vec<Trial>),
     /// `--optimise`: the floor and the start chosen, and the trials.
     pub optimised: (SpiralChoice, Vec<Trial>),
-    /// The baseline: the largest feasible constant ζ ([`best_fixed_zeta`]).
+    /// The baseline: the largest feasible constant ζ (`best_fixed_zeta`).
     pub fixed: Option<(f64, Trial)>,
 }
 
 /// The comparison of the docs' table: the default spiral, the optimiser's choice with other
 /// starts, and the best constant ζ, each simulated and judged by the optimiser's criteria.
 /// Slow (minutes).
-pub fn spiral_study(job: &Job, params: &Params, sim: &SimOptions) -> Result<SpiralStudy> {
-    let regions = job.regions(job.radius(), wall_margin(params))?;
-    let geom = LayerGeom::new(job, &regions, params)?;
-    let zs = job.levels();
-    let mut o = params.clone();
-    o.spiral_optimise = false;
-    let default = optimise_spiral(job, &regions, &geom, &o, sim, &zs)?;
-    o.spiral_optimise = true;
-    let optimised = optimise_spiral(job, &regions, &geom, &o, sim, &zs)?;
-    let fixed = best_fixed_zeta(job, &regions, &geom, params, sim, &zs)?;
-    Ok(SpiralStudy { default, optimised, fixed })
+pub fn spiral_study(job: &Job, opts: &SpiralOptions, link: &LinkOptions, sim: &SimOptions) -> Result<SpiralStudy> {
+    on_job(job, opts, link, sim, |cx| {
+        let mut o = opts.clone();
+        o.optimise = false;
+        let default = optimise_spiral(cx, &o)?;
+        o.optimise = true;
+        let optimised = optimise_spiral(cx, &o)?;
+        let fixed = best_fixed_zeta(cx, opts)?;
+        Ok(SpiralStudy { default, optimised, fixed })
+    })
 }
 
 /// The baseline of the optimiser: the largest constant ζ whose spiral (from the maximum of f)
@@ -242,22 +257,16 @@ pub fn spiral_study(job: &Job, params: &Params, sim: &SimOptions) -> Result<Spir
 /// ζ, which a wider spiral breaks by leaving more rest or engaging more). Returns ζ and its
 /// trial, or `None` when no ζ down to 1e-4 is feasible. Slow (each try is simulated, and a
 /// small ζ makes a long program): for comparisons, not for planning.
-pub fn best_fixed_zeta(
-    job: &Job,
-    regions: &Regions,
-    geom: &LayerGeom,
-    params: &Params,
-    sim: &SimOptions,
-    zs: &[f64],
-) -> Result<Option<(f64, Trial)>> {
+pub(crate) fn best_fixed_zeta(cx: &Context, opts: &SpiralOptions) -> Result<Option<(f64, Trial)>> {
+    let job = cx.job;
     let try_z = |z: f64| -> Result<Trial> {
         let choice = SpiralChoice { zeta: Some(z), ..Default::default() };
-        let tp = plan_spiral_trial(job, regions, geom, params, sim, zs, &choice).map(|(_, written)| written);
+        let tp = plan_spiral_trial(cx, opts, &choice).map(|(_, written)| written);
         let sim = match &tp {
-            Some(tp) => Some(judge_spiral(job, regions, sim, tp)?),
+            Some(tp) => Some(judge_spiral(job, cx.regions, cx.sim, tp)?),
             None => None,
         };
-        Ok(Trial { choice, time_min: tp.map(|tp| tp.totals(job.rapid_rate).time_min), sim })
+        Ok(Trial { choice, time_min: tp.map(|tp| tp.totals(job.cutting.rapid_rate).time_min), sim })
     };
     let (mut lo, mut hi): (Option<(f64, Trial)>, Option<f64>) = (None, None);
     let mut z = 0.02;

@@ -4,14 +4,51 @@
 //! level. Row directions alternate (that is what zigzag means), so climb and conventional
 //! alternate on the rows; the wall contour keeps the chosen milling direction.
 
-use super::{LayerGeom, Params, Pass, PassKind};
+use super::{Clearing, Context};
+use crate::error::{Error, Result, Setting};
 use crate::geom::{DVec2, polyline_length};
+use crate::plan::{LayerGeom, Pass, PassKind};
+use crate::toolpath::Toolpath;
 
-/// Zigzag passes for one level.
-pub fn passes(g: &LayerGeom, params: &Params) -> Vec<Pass> {
+/// The zigzag strategy's options.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ZigzagOptions {
+    /// The row angle, degrees from +X.
+    pub angle_deg: f64,
+}
+
+impl ZigzagOptions {
+    /// Rows along X.
+    pub const DEFAULT: ZigzagOptions = ZigzagOptions { angle_deg: 0.0 };
+}
+
+impl Default for ZigzagOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+impl Clearing for ZigzagOptions {
+    const NAME: &'static str = "zigzag";
+
+    fn validate(&self) -> Result<()> {
+        if !self.angle_deg.is_finite() {
+            return Err(Error::setting(Setting::ZigzagAngle, format!("{}: must be a number", self.angle_deg)));
+        }
+        Ok(())
+    }
+
+    fn plan(&self, cx: &Context) -> Result<Option<Toolpath>> {
+        super::same_passes(cx, passes(cx.geom, cx.link.climb, self.angle_deg))
+    }
+}
+
+/// Zigzag passes for one level: rows at `angle_deg` from +X, the wall contour for climb milling
+/// or conventional.
+pub fn passes(g: &LayerGeom, climb: bool, angle_deg: f64) -> Vec<Pass> {
     let mut out = Vec::new();
     let Some((lo, hi)) = g.centres.bounds() else { return out };
-    let ang = params.zigzag_angle_deg.to_radians();
+    let ang = angle_deg.to_radians();
     let (u, v) = (DVec2::new(ang.cos(), ang.sin()), DVec2::new(-ang.sin(), ang.cos()));
     // extent of the region across the rows
     let corners = [lo, DVec2::new(hi.x, lo.y), hi, DVec2::new(lo.x, hi.y)];
@@ -134,7 +171,7 @@ pub fn passes(g: &LayerGeom, params: &Params) -> Vec<Pass> {
     }
     // the wall contour
     let toward_walls = true;
-    out.extend(super::offset::level_passes(&g.keep, g.wall_level, &g.touch, params, toward_walls, PassKind::Contour));
+    out.extend(super::offset::level_passes(&g.keep, g.wall_level, &g.touch, climb, toward_walls, PassKind::Contour));
     out
 }
 
