@@ -1,29 +1,14 @@
-//! Linking: turns passes into a program — entries, links, retracts — while keeping a raster
-//! model of the material up to date so that every decision is made against what is really left.
-//!
-//! For each pass, in order:
-//! 1. If the tool is down at this level and the straight way to the pass start is free of the
-//!    part: through cleared space it stays down — a rapid at depth, as FreeCAD's Adaptive links
-//!    (`LiftDistance` 0), after a short feed move while the tool still touches the material it
-//!    just cut; with `feed_links`, a feed move (a rapid lifted by a hair when long) for
-//!    controls whose G0 is not straight. Through material only when the step is short (a
-//!    stepover), as a cut.
-//! 2. Otherwise the tool goes up just as far as it must — the *minimum retract*: the approach
-//!    height above the highest material along the way, the safe height only when even that is
-//!    not clear — over to the start, and down (the adaptive strategy first looks for a way at
-//!    depth round the material through cleared space, see [`route`], and takes it when it costs
-//!    less time than the lift):
-//!    - a rapid to just above the material and a descent at the cutting feed (the tool touches
-//!      nothing on the way down) when the tool lands in free space or cleared space (a lateral
-//!      entry from outside the stock);
-//!    - otherwise a **helix** around the start when one fits between the part walls, then one
-//!      full turn at depth (paper 1 §4.5: the distance-transform maximum is where a helix fits;
-//!      closed passes are started at their point farthest from the walls);
-//!    - otherwise a **ramp** zigzagging along the start of the pass;
-//!    - a **plunge** only when neither fits; plunges are counted and reported.
-//! 3. The pass itself, arc-fitted into lines and arcs, is cut into the model.
+//! Linking: turns passes into a program — entries, links, retracts — while keeping a model of
+//! the material up to date (through [`Material`]) so that every decision is made against what
+//! is really left. For each pass: a keep-down link at depth through cleared space when the tool
+//! is down (a short feed move while it leaves the material, then a rapid; a short step through
+//! material as a cut), else a lift to the minimum retract and an entry, the first that fits of a
+//! descent into free or cleared space, a lateral landing, a helix, a ramp and, noted, a plunge;
+//! then the pass, arc-fitted and cut into the model. The walk-through, with a figure, is in
+//! `docs/linking.md`.
 
 use super::LinkOptions;
+use super::material::Material;
 use super::pass::{LANDING_MARGIN, Pass, PassKind};
 use crate::error::Result;
 use crate::geom::arcfit::{self, Piece};
@@ -77,10 +62,12 @@ pub(crate) fn order(passes: &[Pass], from: DVec2) -> Vec<Pass> {
     out
 }
 
-pub(crate) struct Linker<'a> {
+/// Builds the program pass by pass on the material model `M` (the raster model by default).
+pub(crate) struct Linker<'a, M = RasterSim> {
     pub(crate) job: &'a Job,
     pub(crate) link: &'a LinkOptions,
-    pub(crate) sim: RasterSim,
+    /// The planning model of the material, kept up to date with every move pushed.
+    pub(crate) sim: M,
     pub(crate) tp: Toolpath,
     pub(crate) safe_z: f64,
     pub(crate) r: f64,
@@ -112,9 +99,16 @@ impl<'a> Linker<'a> {
     ) -> Result<Self> {
         let mut sim = RasterSim::new(job, regions, sim_opts)?;
         sim.track_exact = false;
+        Ok(Linker::with_model(job, link, sim, first))
+    }
+}
+
+impl<'a, M: Material> Linker<'a, M> {
+    /// A linker on the material model `sim`, the tool at the safe height above `first`.
+    pub(crate) fn with_model(job: &'a Job, link: &'a LinkOptions, sim: M, first: DVec2) -> Self {
         let safe_z = job.top() + link.clearance;
         let tp = Toolpath::new(job.cutting.tool.clone(), DVec3::new(first.x, first.y, safe_z), safe_z);
-        Ok(Linker {
+        Linker {
             job,
             link,
             sim,
@@ -128,7 +122,7 @@ impl<'a> Linker<'a> {
             step: job.stepover_mm(),
             precut: false,
             clear_margin: 0.0,
-        })
+        }
     }
 
     /// Cuts the finishing contours of each level (`finish[i] = (z, passes)`), after the roughing.
@@ -269,7 +263,7 @@ impl<'a> Linker<'a> {
     pub(crate) fn link_around(&mut self, to: DVec2, z: f64) -> bool {
         let cur = self.tp.end();
         let a = cur.truncate();
-        let h = (0.5 * self.r).max(4.0 * self.sim.grid.res);
+        let h = (0.5 * self.r).max(4.0 * self.sim.grid().res);
         let reach = self.r + self.clear_margin + 0.75 * h;
         let budget = self.lift_cost(to, z);
         let margin = self.clear_margin;
@@ -279,7 +273,7 @@ impl<'a> Linker<'a> {
             h,
             budget,
             20_000,
-            |p| self.sim.grid.cell_of(p).is_some() && self.top_near(p, reach) <= z + 0.01 && self.keep_safe(p, p, z),
+            |p| self.sim.grid().cell_of(p).is_some() && self.top_near(p, reach) <= z + 0.01 && self.keep_safe(p, p, z),
             |p| self.keep_safe(a, p, z) && self.sim.leaving_distance(cur, p.extend(z), margin).is_some(),
             |p, q| self.keep_safe(p, q, z) && self.sim.is_clear(&Path::Line { a: p.extend(z), b: q.extend(z) }, margin),
         );
