@@ -81,7 +81,7 @@
 //! The bound is not met everywhere yet — see `docs/RESULTS.md` for the case and the random
 //! pockets where the clean-up passes or a tight pocket still exceed it.
 
-use super::{Clearing, Context};
+use super::{Clearing, Context, Program};
 use crate::error::{Error, Result, Setting};
 use crate::geom::index::EdgeIndex;
 use crate::geom::simplify::douglas_peucker;
@@ -91,7 +91,7 @@ use crate::plan::levels::{Levels, drive};
 use crate::plan::{DP_TOL, LANDING_MARGIN, LayerGeom, Linker};
 use crate::sim::edt;
 use crate::sim::sweep::Path;
-use crate::toolpath::{MoveKind, Toolpath};
+use crate::toolpath::MoveKind;
 use std::f64::consts::{FRAC_PI_2, TAU};
 
 /// How much above the reference a constant-engagement step may read before it is steered away
@@ -160,10 +160,10 @@ impl Clearing for AdaptiveOptions {
         DP_TOL
     }
 
-    fn plan(&self, cx: &Context) -> Result<Option<Toolpath>> {
+    fn plan(&self, cx: &Context) -> Result<Option<Program>> {
         let first = cx.geom.centres.bounds().map_or(DVec2::ZERO, |(lo, _)| lo);
         let mut levels = AdaptiveLevels::new(cx, self, first, |_: &mut Linker, _| {});
-        drive(cx.job, cx.regions, cx.link, cx.sim, cx.zs, cx.finish, &mut levels).map(Some)
+        drive(cx.job, cx.regions, cx.link, cx.sim, cx.zs, cx.finish, &mut levels).map(|tp| Some(tp.into()))
     }
 }
 

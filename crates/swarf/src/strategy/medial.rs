@@ -45,7 +45,7 @@
 //! Circles smaller than [`RHO_MIN`] are not cut (the tip of a branch into a sharp corner).
 //! Every arc is at most a half turn (G2/G3 with distinct ends).
 
-use super::{Clearing, Context};
+use super::{Clearing, Context, Program};
 use crate::error::{Error, Result};
 use crate::geom::DVec2;
 use crate::geom::medial::{Axis, medial_axis};
@@ -53,7 +53,7 @@ use crate::model::Regions;
 use crate::plan::levels::{Levels, drive};
 use crate::plan::{LANDING_MARGIN, LayerGeom, Linker};
 use crate::sim::sweep::Path;
-use crate::toolpath::{MoveKind, Toolpath};
+use crate::toolpath::MoveKind;
 use std::f64::consts::{PI, TAU};
 
 /// Branches whose object angle is below this (degrees) are pruned from the axis.
@@ -397,7 +397,7 @@ impl Default for MedialOptions {
 impl Clearing for MedialOptions {
     const NAME: &'static str = "medial";
 
-    fn plan(&self, cx: &Context) -> Result<Option<Toolpath>> {
+    fn plan(&self, cx: &Context) -> Result<Option<Program>> {
         let axis = medial_axis(&region(cx.regions, cx.geom), MIN_OBJECT_ANGLE)
             .map_err(|e| Error::job("medial strategy", e))?;
         let runs = runs(&axis, cx.geom.step, cx.geom.r);
@@ -413,7 +413,7 @@ impl Clearing for MedialOptions {
             return Err(Error::job("medial strategy", "the tool fits nowhere in the pocket"));
         }
         let mut levels = MedialLevels { runs: &runs, step: cx.geom.step, cut_back: self.cut_back };
-        drive(cx.job, cx.regions, cx.link, cx.sim, cx.zs, cx.finish, &mut levels).map(Some)
+        drive(cx.job, cx.regions, cx.link, cx.sim, cx.zs, cx.finish, &mut levels).map(|tp| Some(tp.into()))
     }
 }
 
