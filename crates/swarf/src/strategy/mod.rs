@@ -9,8 +9,8 @@
 //! - [`zigzag`]: direction-parallel rows at a settable angle, with a contour along the walls;
 //! - [`medial`]: tangent-continuous circles along the medial axis (paper 2);
 //! - [`spiral`]: one oscillator spiral from the inside out to the walls (paper 4), its damping
-//!   and start chosen by [`spiral_search`];
-//! - [`cleanup`]: extra passes where the others left material the tool can reach.
+//!   and start chosen by the spiral search (`spiral_search`);
+//! - `cleanup`: extra passes where the others left material the tool can reach.
 //!
 //! A strategy is added by writing its file (its options struct, which implements the
 //! crate-internal `Clearing` trait) and one arm of [`Strategy`] (and of the `each!` dispatch

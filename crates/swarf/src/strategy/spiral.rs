@@ -1,48 +1,21 @@
 //! Oscillator spirals (paper 4, Kalmar-Nagy & Erdim): one smooth path from the inside of the
 //! pocket out to its walls, with no link.
 //!
-//! The tool-centre region of the job (the pocket less its walls grown by the tool radius,
-//! [`super::medial::region`]) is embedded in an implicit function `f`, positive inside and zero
-//! on the boundary ([`crate::implicit::region::AreaField`], §3). Read as the energy of an
-//! oscillator with negative damping ζ (eq. 6), `f` gives a trajectory that spirals out from the
-//! maximum of `f` across its level sets until it reaches the boundary, which it then follows for
-//! one turn ([`crate::implicit::oscillator`]). The program:
+//! The tool-centre region ([`super::medial::region`]) is embedded in an implicit function `f`,
+//! positive inside and zero on the boundary ([`crate::implicit::region::AreaField`], §3), and
+//! `f`, read as the energy of an oscillator with negative damping ζ (eq. 6), gives a trajectory
+//! that spirals out from a helix entry at the maximum of `f` across its level sets to the
+//! boundary and follows it for one turn ([`crate::implicit::oscillator`]); ζ is constant or
+//! chosen per level for the stepover and the engagement, and the trajectory is written as
+//! tangent-continuous G2/G3 biarcs. A region with islands gets a spiral over its island-free
+//! core only ([`core_level`], [`CORE_FRACTION`]) and the adaptive strategy (paper 1) clears the
+//! rest; the engagement floor is chosen by the spiral search of §4, Figs. 8–9. The walk-through
+//! (entry, spiral, output, islands, the floor) is in `docs/spiral.md`, the mathematics in
+//! `docs/implicit.md`.
 //!
-//! 1. **Entry**: a helix round the start point (the maximum of `f`, or `--spiral-start`), of
-//!    radius at most half the tool's and within the region, ending a sixth of a turn before the
-//!    point where the spiral leaves the bore; a biarc joins the two tangentially.
-//! 2. **The spiral**: ζ either constant (`--zeta`) or chosen per level so that successive turns
-//!    are at most a stepover apart and, where a turn curves tightly, no further apart than
-//!    keeps the engagement at the reference ([`crate::implicit::oscillator::engagement_spacing`]).
-//!    It ends with one turn along the level `f = TRACK_LEVEL` (a few µm inside the boundary).
-//! 3. **Output**: the integrated polyline, with the integrator's own tangent at each point,
-//!    is written as biarcs within the arc tolerance ([`crate::geom::biarc`]), so the program
-//!    is G2/G3 arcs meeting tangentially throughout. Where the levels bend tightly (the
-//!    rounded corners of a polygonal region, and the turns just inside them) arcs within the
-//!    tolerance are a few hundredths of a millimetre long, and a run of them reads as a
-//!    polygon at the scale of a controller's look-ahead or a simulator's grid. There a biarc
-//!    is widened until its arcs are at least [`MIN_ARC`] long, if it then cuts the bend
-//!    inwards by at most [`CORNER_CUT`] and strays outwards by no more than the tolerance: it
-//!    comes no nearer the walls than the tolerance already allows.
+#![doc = include_str!("../../../../docs/figures/spiral_pockets.svg")]
 //!
-//! **What the method cannot do, and what is done instead.** A spiral covers a simply connected
-//! region: with an island, the levels of `f` split round it, and the trajectory cannot follow
-//! both parts. In a piece of the region with islands the spiral stops at the level where its
-//! set would close round an island ([`core_level`]), or at half of `f` at the start if that
-//! is lower down ([`CORE_FRACTION`]), and the adaptive strategy (paper 1) clears the rest
-//! from what the material model says is left. A job whose tool-centre region falls apart (a
-//! pocket with narrow necks) gets one spiral per piece, each with its entry.
-//!
-//! The region's own `f` is scaled down with the distance from the start (`Shaped`), so that no
-//! level runs the length of a long leg at once (a ridge of `f`).
-//!
-//! **The floor.** Where a level curves tightly the engagement limit asks for a small gap; it
-//! is never asked below a floor (a fraction of the stepover), or every turn of a level with a
-//! sharp tip would crawl. A wide floor is fast and engages the tool more in tight turns.
-//! Unless a floor or a constant ζ is given, the spiral search (`optimise_spiral`) chooses it:
-//! the loop of §4, Figs. 8–9, which plans a spiral for each candidate (floors, and with
-//! `--optimise` start points), simulates them fastest first, and keeps the first that clears
-//! the pocket within the engagement bound.
+//! *The strategy's spirals on two example cases, drawn by the `spiral_figures` example.*
 
 use super::{AdaptiveOptions, Context};
 use crate::error::{Error, Result};
@@ -73,7 +46,7 @@ pub const CORNER_RADIUS: f64 = 0.25;
 /// before the biarcs are fitted.
 pub const MIN_POINT_GAP: f64 = 0.01;
 
-/// Shortest chord wanted of a written arc, mm (see [`biarc::Tolerance::min_len`]).
+/// Shortest chord wanted of a written arc, mm (see `geom::biarc::Tolerance::min_len`).
 pub const MIN_ARC: f64 = 0.12;
 
 /// How far a written arc may cut inside the integrated spiral where it is widened to
