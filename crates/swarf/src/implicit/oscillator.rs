@@ -255,8 +255,24 @@ fn dp_step(rhs: &mut Rhs, y: DVec2, k1: DVec2, h: f64, phase: Phase) -> Result<S
 /// must be bounded ([`Field::bounds`]). Errors (typed, never a hang): an unbounded field, bad
 /// options, `f(start) ≤ f_end`, a vanishing gradient, a stalled or endless spiral.
 pub fn spiral(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<Spiral> {
+    spiral_on(field, start, opts, None)
+}
+
+/// [`spiral`], with the samples of `field` its ζ per level reads level sets from, when the
+/// caller has them: `grid` must be [`Grid::of_field`] of the same field (it is sampled here,
+/// once for all the spiral's tries, when not given).
+pub fn spiral_on(field: &dyn Field, start: DVec2, opts: &SpiralOptions, grid: Option<&Grid>) -> Result<Spiral> {
     let Damping::Stepover { w, .. } = opts.damping else {
-        return spiral_once(field, start, opts, 1.0);
+        return spiral_once(field, start, opts, 1.0, None);
+    };
+    let sampled;
+    let grid = match grid {
+        Some(g) => Some(g),
+        None if field.bounds().is_some_and(|(lo, hi)| (hi - lo).length().is_finite() && (hi - lo).length() > 0.0) => {
+            sampled = Grid::of_field(field);
+            sampled.as_ref()
+        }
+        None => None,
     };
     // the per-level ζ rests on a linear estimate of the gap (and a conservative table): where
     // levels bend (rounded corners, tongues into narrow parts) the real gap can be larger, and
@@ -264,7 +280,7 @@ pub fn spiral(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<S
     let mut gain = 1.0;
     let mut best: Option<Spiral> = None;
     for _ in 0..5 {
-        let s = spiral_once(field, start, opts, gain)?;
+        let s = spiral_once(field, start, opts, gain, grid)?;
         let m = s.max_spacing;
         log::debug!("spiral gain {gain:.4}: {:.1} turns, length {:.1}, max spacing {m:.4} (w {w})", s.turns, s.length);
         let ok = m <= opts.accept_gap.unwrap_or(w);
@@ -280,11 +296,19 @@ pub fn spiral(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<S
     }
     match best {
         Some(s) => Ok(s),
-        None => spiral_once(field, start, opts, gain),
+        None => spiral_once(field, start, opts, gain, grid),
     }
 }
 
-fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64) -> Result<Spiral> {
+/// One spiral with ζ per level scaled by `gain`; `grid`: [`Grid::of_field`] of `field`, or
+/// `None` to sample it here.
+fn spiral_once(
+    field: &dyn Field,
+    start: DVec2,
+    opts: &SpiralOptions,
+    gain: f64,
+    grid: Option<&Grid>,
+) -> Result<Spiral> {
     let (lo, hi) = field.bounds().ok_or_else(|| Error::job("spiral", "the shape is unbounded"))?;
     let size = (hi - lo).length();
     if !(size > 0.0) || !size.is_finite() {
@@ -323,7 +347,26 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64)
     let h_min = size * 1e-12;
     let table = match opts.damping {
         Damping::Stepover { w, safety, zeta_min, zeta_max } => {
-            Some(ZetaTable::new(field, lo, hi, opts.f_end, f0, gain * safety * w, zeta_min, zeta_max, opts.engagement))
+            let sampled;
+            let grid = match grid {
+                Some(g) => g,
+                None => {
+                    sampled = Grid::of_field(field).ok_or_else(|| Error::job("spiral", "the shape is unbounded"))?;
+                    &sampled
+                }
+            };
+            Some(ZetaTable::new(
+                grid,
+                field,
+                lo,
+                hi,
+                opts.f_end,
+                f0,
+                gain * safety * w,
+                zeta_min,
+                zeta_max,
+                opts.engagement,
+            ))
         }
         Damping::Constant(_) => None,
     };
@@ -548,6 +591,7 @@ impl ZetaTable {
     /// κ = div(−∇f/|∇f|) by central differences.
     #[allow(clippy::too_many_arguments)]
     fn new(
+        grid: &Grid,
         field: &dyn Field,
         lo: DVec2,
         hi: DVec2,
@@ -558,8 +602,6 @@ impl ZetaTable {
         zmax: f64,
         eng: Option<EngagementLimit>,
     ) -> ZetaTable {
-        let pad = (hi - lo) * 0.02;
-        let grid = Grid::sample(field, lo - pad, hi + pad, 256);
         let h = 1e-4 * (hi - lo).length();
         let normal = |p: DVec2| -field.eval(p).g.normalize_or_zero();
         let allowed = |p: DVec2, g: f64| {

@@ -2,7 +2,9 @@
 //! planned, the fastest simulated first, the first that clears the pocket within the
 //! engagement bound kept; and the baseline of the docs' table, the best constant ζ.
 
-use super::spiral::{ENGAGEMENT_FLOOR, SpiralChoice, SpiralOptions, Trial, TrialSim, candidates, link_spiral};
+use super::spiral::{
+    ENGAGEMENT_FLOOR, SpiralChoice, SpiralFields, SpiralOptions, Trial, TrialSim, candidates, link_spiral,
+};
 use super::{Clearing, Context, Program, Strategy};
 use crate::error::{Error, Result, Setting};
 use crate::model::{Job, Regions};
@@ -79,7 +81,7 @@ pub(crate) fn plan_spiral(cx: &Context, opts: &SpiralOptions) -> Result<Program>
     // follow it
     let mut program: Program = match planned {
         Some(p) if cx.finish.is_empty() => p,
-        _ => link_spiral(cx, &opts.adaptive, &choice)?.into(),
+        _ => link_spiral(cx, &SpiralFields::new(cx.regions, cx.geom), &opts.adaptive, &choice)?.into(),
     };
     if let Some(text) = missed {
         program.toolpath.notes.insert(0, crate::toolpath::Note { at: 0, text });
@@ -113,8 +115,9 @@ fn optimise_spiral_planned(cx: &Context, opts: &SpiralOptions) -> Result<(Spiral
     let job = cx.job;
     let bound = spiral_bound(job);
     let candidates = candidates(cx.regions, cx.geom, opts.start, opts.optimise)?;
+    let fields = SpiralFields::new(cx.regions, cx.geom);
     let mut planned: Vec<Option<(Toolpath, Toolpath)>> =
-        candidates.par_iter().map(|c| plan_spiral_trial(cx, opts, c)).collect();
+        candidates.par_iter().map(|c| plan_spiral_trial(cx, &fields, opts, c)).collect();
     let mut proofs: Vec<Option<(Replay, Rest)>> = (0..candidates.len()).map(|_| None).collect();
     let mut trials: Vec<Trial> = candidates
         .iter()
@@ -208,9 +211,14 @@ fn spiral_bound(job: &Job) -> f64 {
 
 /// The program of one spiral candidate as planned and as it will be written (quantised), or
 /// `None` where the spiral cannot be made.
-fn plan_spiral_trial(cx: &Context, opts: &SpiralOptions, choice: &SpiralChoice) -> Option<(Toolpath, Toolpath)> {
+fn plan_spiral_trial(
+    cx: &Context,
+    fields: &SpiralFields,
+    opts: &SpiralOptions,
+    choice: &SpiralChoice,
+) -> Option<(Toolpath, Toolpath)> {
     let trial = Context { finish: &[], ..*cx };
-    let tp = link_spiral(&trial, &opts.adaptive, choice).ok()?;
+    let tp = link_spiral(&trial, fields, &opts.adaptive, choice).ok()?;
     let mut written = tp.clone();
     written.quantize(post::COORD_STEP, post::CENTER_STEP);
     Some((tp, written))
@@ -267,9 +275,10 @@ pub fn spiral_study(job: &Job, opts: &SpiralOptions, link: &LinkOptions, sim: &S
 /// small ζ makes a long program): for comparisons, not for planning.
 pub(crate) fn best_fixed_zeta(cx: &Context, opts: &SpiralOptions) -> Result<Option<(f64, Trial)>> {
     let job = cx.job;
+    let fields = SpiralFields::new(cx.regions, cx.geom);
     let try_z = |z: f64| -> Result<Trial> {
         let choice = SpiralChoice { zeta: Some(z), ..Default::default() };
-        let tp = plan_spiral_trial(cx, opts, &choice).map(|(_, written)| written);
+        let tp = plan_spiral_trial(cx, &fields, opts, &choice).map(|(_, written)| written);
         let sim = match &tp {
             Some(tp) => Some(judge_spiral(job, cx.regions, cx.sim, tp)?.0),
             None => None,
