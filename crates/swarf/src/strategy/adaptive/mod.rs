@@ -34,13 +34,12 @@ mod start;
 mod step;
 mod walls;
 
-use super::{Clearing, Context};
+use super::{Clearing, Context, Program};
 use crate::error::{Error, Result, Setting};
 use crate::geom::DVec2;
 use crate::model::Job;
 use crate::plan::levels::{Levels, drive};
 use crate::plan::{DP_TOL, LayerGeom, Linker};
-use crate::toolpath::Toolpath;
 use engine::{Engine, Setup};
 
 /// How much above the reference a constant-engagement step may read before it is steered away
@@ -109,10 +108,10 @@ impl Clearing for AdaptiveOptions {
         DP_TOL
     }
 
-    fn plan(&self, cx: &Context) -> Result<Option<Toolpath>> {
+    fn plan(&self, cx: &Context) -> Result<Option<Program>> {
         let first = cx.geom.centres.bounds().map_or(DVec2::ZERO, |(lo, _)| lo);
         let mut levels = AdaptiveLevels::new(cx, self, first, |_: &mut Linker, _| {});
-        drive(cx.job, cx.regions, cx.link, cx.sim, cx.zs, cx.finish, &mut levels).map(Some)
+        drive(cx.job, cx.regions, cx.link, cx.sim, cx.zs, cx.finish, &mut levels).map(|tp| Some(tp.into()))
     }
 }
 
