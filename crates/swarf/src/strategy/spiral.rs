@@ -583,6 +583,7 @@ pub fn candidates(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geom::Area;
 
     #[test]
     fn the_core_of_a_pocket_with_an_island_stops_short_of_the_island() {
