@@ -94,6 +94,10 @@ pub struct Report {
     pub compute_s: f64,
     /// Time to simulate it for this report (s).
     pub simulate_s: f64,
+    /// Whether the program was simulated. Without a simulation (`--no-simulate`) the
+    /// simulation's figures (engagement, air cutting, gouges, rapid collisions, rest) were not
+    /// measured and read 0, and `plunges` counts the plunges the program marks.
+    pub simulated: bool,
     /// Feed-move length, mm.
     pub cut_length_mm: f64,
     /// Rapid length, mm.
@@ -178,6 +182,7 @@ pub fn fill_program(rep: &mut Report, tp: &Toolpath, rapid_rate: f64) {
 /// Fills every figure of a report: the program's ([`fill_program`]) and the simulation's.
 pub fn fill(rep: &mut Report, tp: &Toolpath, replay: &Replay, rest: &Rest, rapid_rate: f64) {
     fill_program(rep, tp, rapid_rate);
+    rep.simulated = true;
     let lateral: Vec<_> = replay.samples.iter().filter(|s| s.kind == SampleKind::Lateral).collect();
     rep.engagement_lateral_deg = Stats::of(lateral.iter().map(|s| s.tea as f64).collect());
     rep.engagement_deg = Stats::of(lateral.iter().filter(|s| !s.bore).map(|s| s.tea as f64).collect());
