@@ -572,7 +572,7 @@ fn run_all(name: &str, seeds: std::ops::Range<u64>, make: fn(u64, &str) -> Case,
             over_bound.push(format!("seed {}: {}", case.seed, problems.join("; ")));
         } else if !problems.is_empty() {
             failures.push(format!(
-                "seed {} ({}), flags {}:\n  {}\n  reproduce: PROP_SEEDS={} cargo test -p swarf --test property\n  case JSON: {}",
+                "seed {} ({}), flags {}:\n  {}\n  reproduce: PROP_SEEDS={} cargo test -p swarf --test suite property::\n  case JSON: {}",
                 case.seed,
                 case.what,
                 flags(&case.strategy, &case.link, case.res),
@@ -655,7 +655,7 @@ fn parallel(name: &str, seeds: std::ops::Range<u64>, strategy: &str) {
     results.sort_by_key(|(c, _)| c.seed);
     let describe = |c: &Case, p: &[String]| {
         format!(
-            "seed {} ({}), flags {}:\n  {}\n  reproduce: PROP_SEEDS={} cargo test -p swarf --test property\n  case JSON: {}",
+            "seed {} ({}), flags {}:\n  {}\n  reproduce: PROP_SEEDS={} cargo test -p swarf --test suite property::\n  case JSON: {}",
             c.seed,
             c.what,
             flags(&c.strategy, &c.link, c.res),
