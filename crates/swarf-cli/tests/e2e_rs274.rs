@@ -397,7 +397,7 @@ fn zigzag_grbl() {
 // The medial circles leave cusps of up to 2 % of the tool on the walls by design (plan::medial::
 // CUSP). In narrow_slot's 4 mm channel, the default cell (0.06 mm for the Ø6 tool) counts
 // the cells under them as rest: 0.54 % of the reachable area, where the independent verifier
-// at 0.1 mm finds 0.00 %. These runs use 0.1 mm cells, as tests/medial.rs does.
+// at 0.1 mm finds 0.00 %. These runs use 0.1 mm cells, as the library's tests/suite/medial.rs does.
 #[test]
 fn medial_linuxcnc() {
     run_all_with("medial", "linuxcnc", &["--res", "0.1"]);
