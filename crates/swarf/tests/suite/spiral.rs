@@ -50,7 +50,16 @@ fn clean_smooth_and_in_one_piece(name: &str) {
                 sim: SimOptions { res: Some(0.1), ..Default::default() },
                 ..Default::default()
             };
-            let out = rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
+            // planned once: the planned program is checked below, and posted and proved here
+            let planned = swarf::job::rough::plan(&job, &opts).unwrap_or_else(|e| panic!("{e}")).expect("a program");
+            let out = swarf::job::rough::rough_planned(
+                &job,
+                &opts,
+                planned.clone(),
+                std::time::Instant::now(),
+                &mut |_, _| {},
+            )
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
             let r = &out.report;
             let what = format!("{name} ({})", if climb { "climb" } else { "conventional" });
             common::check_clean(&what, r, &mut bad);
@@ -67,7 +76,6 @@ fn clean_smooth_and_in_one_piece(name: &str) {
             // tangent-continuous as planned; the written program rounds coordinates to 1 µm,
             // which tilts the ends of the shortest arcs (a few hundredths of a millimetre long,
             // in the tight tips of the levels along an L's legs) by up to 2°
-            let planned = swarf::job::rough::plan(&job, &opts).unwrap_or_else(|e| panic!("{e}")).expect("a program");
             let turns = planned.toolpath.cutting_turns();
             assert!(turns.len() > 20, "{what}: {} junctions", turns.len());
             let worst = turns.iter().map(|t| t.1).fold(0.0, f64::max);
