@@ -6,7 +6,7 @@
 //! a tree, and it is ten lines of code; each edge is listed in every cell its bounding box
 //! touches (compressed-row storage).
 
-use super::{Area, DVec2, dist_point_segment, dist_segment_segment};
+use super::{Area, DVec2, closest_param, dist_point_segment, dist_segment_segment};
 
 /// Segments bucketed in a uniform grid.
 #[derive(Debug, Clone)]
@@ -146,6 +146,20 @@ impl EdgeIndex {
         best
     }
 
+    /// The nearest point of the edges to `p` and its distance, when one is closer than `max`.
+    pub fn nearest(&self, p: DVec2, max: f64) -> Option<(DVec2, f64)> {
+        let mut best: Option<(DVec2, f64)> = None;
+        let m = DVec2::splat(max);
+        self.for_each_near(p - m, p + m, |_, a, b| {
+            let q = a + (b - a) * closest_param(p, a, b);
+            let d = (q - p).length();
+            if d < best.map_or(max, |b| b.1) {
+                best = Some((q, d));
+            }
+        });
+        best
+    }
+
     /// Distance from segment `a`–`b` to the nearest edge, or `max` when none is closer.
     pub fn segment_distance(&self, a: DVec2, b: DVec2, max: f64) -> f64 {
         let mut best = max;
@@ -239,6 +253,13 @@ mod tests {
             let q = p + DVec2::new(rnd() / 10.0 - 5.0, rnd() / 10.0 - 5.0);
             let brute2 = edges.iter().map(|(a, b)| dist_segment_segment(p, q, *a, *b)).fold(f64::INFINITY, f64::min);
             assert!((idx.segment_distance(p, q, 8.0) - brute2.min(8.0)).abs() < 1e-12);
+            match idx.nearest(p, 8.0) {
+                Some((at, d)) => {
+                    assert!((d - brute).abs() < 1e-12 && (at - p).length() - d < 1e-12);
+                    assert!(edges.iter().any(|(a, b)| dist_point_segment(at, *a, *b) < 1e-9));
+                }
+                None => assert!(brute >= 8.0),
+            }
         }
     }
 

@@ -21,9 +21,11 @@
 //! its levels below clear nothing above `z`). The tool's own path is trimmed to where its disk
 //! (grown by [`NEED_MARGIN`]) meets that material — the paper's `TrimTPC(offset(A₁, −r), TPC)`
 //! written for several earlier tools with their own levels. A trimmed piece starts and ends
-//! where the disk is in air, so the tool goes down there without plunging into material; a
-//! path that starts in material (the first tool, or a region no earlier tool reached) ramps
-//! down along its first loop. Between pieces the tool either feeds on along its path through
+//! where the disk is in air, so the tool goes down there without plunging into material (where
+//! the disk there reaches into the thin band along the part that counts as cleared, it goes
+//! down a few hundredths further from the part and feeds across: a sliver of the band may stand
+//! there as high as the level above, on a sloping wall); a path that starts in material (the
+//! first tool, or a region no earlier tool reached) ramps down along its first loop. Between pieces the tool either feeds on along its path through
 //! the cleared air or retracts and rapids, whichever is quicker.
 //!
 //! Algorithm 3 (the traditional decomposition) is kept for comparison

@@ -80,6 +80,8 @@ pub(super) struct Prepared {
     /// At each of them, the part's keep grown a little (the band no tool enters counts as
     /// cleared).
     pub(super) bands: Vec<Area>,
+    /// Their edges (where a piece goes down, [`Emitter::descend`]).
+    band_edges: Vec<EdgeIndex>,
     pub(super) stock: Area,
     pub(super) top: f64,
     clear_z: f64,
@@ -133,6 +135,7 @@ pub(super) fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<P
         .collect();
     log::debug!("toolseq: {} levels, shadows in {:.2} s", zs.len(), t0.elapsed().as_secs_f64());
     let bands: Vec<Area> = keeps.par_iter().map(|k| k.offset(WALL_MARGIN + 0.03, REGION_TOL)).collect();
+    let band_edges: Vec<EdgeIndex> = bands.par_iter().map(|b| EdgeIndex::from_area(b, 1.0)).collect();
     let stock = job.stock_area();
     let keep_at = |z: f64| zs.iter().position(|&w| w == z).expect("a level of some tool");
     let pairs: Vec<(usize, usize)> =
@@ -185,6 +188,7 @@ pub(super) fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<P
         tools,
         zs,
         bands,
+        band_edges,
         stock,
         top: job.stock_hi.z,
         clear_z: job.top() + opts.clearance,
@@ -604,9 +608,7 @@ impl Emitter<'_> {
             let mut a = a;
             if let (0, Some(i0)) = (a, rotate) {
                 let q = c.pts[i0];
-                self.go_to(q, lv, li);
-                self.tp.rapid(DVec3::new(q.x, q.y, z + APPROACH));
-                self.tp.line(MoveKind::Descend, DVec3::new(q.x, q.y, z), self.feed);
+                self.descend(q, lv, li);
                 self.lines(&c.pts[i0..=re], MoveKind::Cut, z);
                 self.lines(&c.pts[..=i0], MoveKind::Cut, z);
                 let back: Vec<DVec2> = c.pts[..=i0].iter().rev().copied().collect();
@@ -634,9 +636,7 @@ impl Emitter<'_> {
                     }
                 }
             } else {
-                self.go_to(p, lv, li);
-                self.tp.rapid(DVec3::new(p.x, p.y, z + APPROACH));
-                self.tp.line(MoveKind::Descend, DVec3::new(p.x, p.y, z), self.feed);
+                self.descend(p, lv, li);
             }
             // the cut: straight runs merged (the points are a sampling of the loops' edges)
             let mut run: Vec<DVec2> = vec![c.pts[a]];
@@ -651,6 +651,41 @@ impl Emitter<'_> {
                 run.push(c.pts[i]);
             }
             self.lines(&run, kind, z);
+        }
+    }
+
+    /// Down to `p` at level `lv`, where the disk is in air: a rapid to just above the level and
+    /// a feed move down, at `p` or, when the disk there reaches into the band along the part
+    /// that the material model counts as cleared ([`Prepared::bands`]: a sliver up to 0.03 mm
+    /// wide may stand there as high as the level above, on a sloping wall), at the nearest
+    /// point away from the band where it does not, and across to `p` at the level.
+    fn descend(&mut self, p: DVec2, lv: &Level, li: usize) {
+        let z = lv.z;
+        let r = self.tp.tool.radius();
+        let want = r + WALL_MARGIN;
+        // (pushed off the nearest band edge a few times: in a corner, off the next one too;
+        // 2 µm more, for the rounding of the coordinates; never further than NEED_MARGIN, so
+        // that the disk stays in air)
+        let band = &self.prep.band_edges[lv.zi];
+        let mut at = p;
+        for _ in 0..4 {
+            match band.nearest(at, want) {
+                Some((q, d)) if d > 1e-9 => at += (at - q) / d * (want - d + 0.002),
+                _ => break,
+            }
+        }
+        let clear = (at - p).length() < NEED_MARGIN
+            && band.distance(at, want) >= want
+            && !self.prep.bands[lv.zi].contains(at)
+            && lv.centres.contains(at);
+        if !clear {
+            at = p;
+        }
+        self.go_to(at, lv, li);
+        self.tp.rapid(DVec3::new(at.x, at.y, z + APPROACH));
+        self.tp.line(MoveKind::Descend, DVec3::new(at.x, at.y, z), self.feed);
+        if at != p {
+            self.tp.line(MoveKind::Cut, DVec3::new(p.x, p.y, z), self.feed);
         }
     }
 
