@@ -2,7 +2,7 @@
 //! tool centres and contour-parallel loops, prepared once whatever the sequence, and the
 //! program of a tool given the tools before it — its loops trimmed to the material they left
 //! (or, for Algorithm 3, new loops over the rest region), emitted with its own entries and
-//! links.
+//! links. See the module [`super`] for why the search keeps these paths and this emitter.
 
 use super::{Decomposition, MAX_TOOLS, SeqOptions};
 use crate::error::{Error, Result};
@@ -83,7 +83,7 @@ pub(super) struct Prepared {
     /// Their edges (where a piece goes down, [`Emitter::descend`]).
     band_edges: Vec<EdgeIndex>,
     pub(super) stock: Area,
-    pub(super) top: f64,
+    top: f64,
     clear_z: f64,
     pub(super) machine: crate::model::tooldb::Machine,
     opts: SeqOptions,
