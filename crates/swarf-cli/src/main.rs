@@ -804,6 +804,12 @@ fn write_outputs(scene: impl FnOnce() -> Scene, res: &RoughResult, out: &Outputs
 }
 
 fn summary(r: &swarf::report::Report) -> String {
+    if !r.simulated {
+        return format!(
+            "{} {}: {:.0} mm cut, {:.2} min, {} plunges, not simulated, computed in {:.2} s",
+            r.input, r.strategy, r.cut_length_mm, r.time_min, r.plunges, r.compute_s
+        );
+    }
     format!(
         "{} {}: {:.0} mm cut, {:.2} min, engagement max {:.1} p95 {:.1} deg, {} plunges, {} gouges, {} rapid collisions, rest {:.2}%, computed in {:.2} s",
         r.input,

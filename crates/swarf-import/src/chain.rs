@@ -1,43 +1,13 @@
 //! Chaining loose pieces (lines, arcs, open polylines) into closed contours.
 //!
 //! Drawings often describe one outline as many separate entities whose endpoints merely touch.
-//! [`chain`] joins such [`Piece`]s end to end:
-//!
-//! * Every open piece contributes two *ends*. The ends go into a uniform hash grid whose cells
-//!   are `tol` wide, so the ends within `tol` of a point are found by looking at the few cells
-//!   around it: chaining `n` pieces costs `O(n)` on ordinary drawings, not `O(n²)`.
-//! * Chains grow from the unused piece with the lowest index: first forward from its end, then
-//!   backward from its start. At each step the *nearest* unused end within `tol` is taken (ties
-//!   broken by piece index, then start before end), and the piece is reversed when it is met at
-//!   its end. Reversal uses [`Contour::reverse`], so arcs keep their exact bulges (negated and
-//!   moved to the other end of their segment).
-//! * Before every step the chain checks whether its own two ends meet within `tol` (and it is
-//!   longer than `2 * tol`, so that a single tiny piece does not close on itself): if so it
-//!   closes. Closing is preferred over extending, so at a point where three or more ends meet
-//!   (two squares sharing a corner) each loop closes on its own; otherwise the choice is the
-//!   nearest end, deterministically.
-//! * When no end is left to join, a chain whose ends meet within `tol` closes whatever its
-//!   length; a closed result with fewer than two vertices (a lone piece shorter than `tol`) is
-//!   dropped.
-//! * Each joint is snapped to the midpoint of the two endpoints it joins, which moves no point by
-//!   more than `tol / 2`. A single arc that closes on itself becomes the full circle through the
-//!   snapped point, as two half circles.
-//! * Pieces that are already closed pass through untouched, except exact repeats of an earlier
-//!   one (a circle drawn twice), which are dropped. Open pieces with fewer than two vertices are
-//!   dropped.
-//! * Open pieces that repeat each other (*twins*: the same vertices within `tol / 1000` and the
-//!   same bulges, either way round) are all kept, since two outlines may share an edge drawn
-//!   once for each, but a chain never continues along a twin of the piece it just took (it
-//!   would close a zero-area loop). A chain left open that consists only of twins of pieces in
-//!   closed contours is redundant (an edge drawn twice) and is dropped, not reported.
-//!
-//! Chains that stay open are reported with their *gaps*: for each dangling end, the nearest other
-//! dangling end (of any open chain, its own other end included) and the distance between them,
-//! found with a sweep over the ends sorted by x. [`open_contour_message`] turns them into the
-//! message a reader returns ("open contour: 2 gaps (3.000 mm between (23.000, 109.000) and …").
-//!
-//! The output is deterministic: closed contours come in the order of their lowest piece index,
-//! open chains likewise.
+//! [`chain`] joins such [`Piece`]s end to end, taking at each step the nearest unused end within
+//! `tol` (found in a hash grid, so `O(n)` on ordinary drawings), closing a chain as soon as its
+//! own ends meet, snapping each joint to the midpoint of its two ends and keeping arcs exact
+//! (reversed with [`Contour::reverse`]); repeated pieces and edges drawn twice are handled
+//! without zero-area loops. A chain that stays open is reported with its gaps
+//! ([`open_contour_message`]), and the output is deterministic. The rules in full are in
+//! `docs/import.md`.
 
 use crate::contour::{Contour, Segment, Vertex};
 use std::collections::HashMap;

@@ -1,56 +1,15 @@
 //! DXF reader: ASCII DXF (R12 to 2018) into closed contours in millimetres.
 //!
-//! # Why a hand parser
-//!
-//! The `dxf` crate reads these files, but it keeps no line numbers, and every message this
-//! reader gives must say where the defect is (`ARC (handle 2F) at line 1234`). An ASCII DXF file
-//! is only a list of *group-code pairs* (a code line, then a value line), so this module reads
-//! the pairs itself, keeping the line of each, and interprets the few sections it needs:
-//! `HEADER` (`$INSUNITS`), `BLOCKS` (for `INSERT`) and `ENTITIES`. Everything else (tables,
-//! objects, classes, thumbnails) is skipped. Binary DXF is refused with a message asking for
-//! an ASCII export; so are DWG files.
-//!
-//! # Entities
-//!
-//! * `LINE`, `ARC`, `CIRCLE`, `LWPOLYLINE` and 2D `POLYLINE`/`VERTEX` (with bulges) become
-//!   contours whose arcs stay exact (bulge form); an `ARC` is split into pieces of at most 180°
-//!   so that no bulge exceeds 1. 3D polylines are projected onto XY; polygon and polyface
-//!   meshes are ignored.
-//! * `SPLINE`: B-splines of any degree, rational or not, with their knot vector, are evaluated by
-//!   de Boor's algorithm in homogeneous coordinates. A spline given only by fit points is
-//!   interpolated by a C² cubic through them (chord-length parameters; the end tangents of the
-//!   file when given, natural ends otherwise; periodic when closed). This matches CAD programs
-//!   at the fit points and closely in between.
-//! * `ELLIPSE`, full or partial: a circular one becomes exact arcs; others are flattened.
-//! * Curves that cannot be kept exact are flattened adaptively: each parameter interval (each
-//!   knot span, first cut into a few parts) is halved until the curve at its quarter, half and
-//!   three-quarter points lies within [`ImportOptions::flatten_tolerance`] of the chord.
-//! * `INSERT` (and `MINSERT` arrays) of blocks, nested to any depth, with base point, insertion
-//!   point, scale, rotation and extrusion. Entities on layer `0` inside a block take the
-//!   layer of the `INSERT`. Under a non-uniform scale arcs are flattened, since they become
-//!   ellipses.
-//! * The object coordinate system (OCS) of `ARC`, `CIRCLE`, `LWPOLYLINE`, 2D `POLYLINE` and
-//!   `INSERT` is applied with the "arbitrary axis" rule: an extrusion of (0, 0, −1) mirrors x.
-//! * Text, dimensions, hatches, points, solids, images, 3D and ACIS entities are ignored, and
-//!   so are entities in paper space (group code 67 = 1).
-//!
-//! # Units, layers and chaining
-//!
-//! `$INSUNITS` gives the units (0 or missing: unitless, read as millimetres);
-//! [`ImportOptions::units`] overrides it. Everything is converted to millimetres. A shape's
-//! layer is the entity's layer and its role comes from [`Role::from_layer_name`]. Open pieces are
-//! joined by [`chain::chain`] within [`ImportOptions::chain_tolerance`], separately for each
-//! role; a chain left open is an error that names its gaps (see
-//! [`chain::open_contour_message`]).
-//!
-//! # Messages
-//!
-//! An entity is named by its type, its handle (group code 5) when it has one, and the line of
-//! the file that holds its type name: `ARC (handle 2F) at line 1234`; inside a block, the
-//! insertion is appended (`… in block "BOLT" inserted at line 900`). The reader never panics on
-//! bad input: malformed numbers, NaN or infinite coordinates, truncated files and garbage are
-//! errors naming the line or the entity, and block expansion and curve flattening are bounded
-//! (nesting depth, copies, entities, points).
+//! A hand parser of the group-code pairs (the `dxf` crate keeps no line numbers, and every
+//! message names the entity and its line, `ARC (handle 2F) at line 1234`) that reads `HEADER`
+//! (`$INSUNITS`), `BLOCKS` and `ENTITIES`: `LINE`, `ARC`, `CIRCLE`, `LWPOLYLINE` and 2D
+//! `POLYLINE` with exact arcs (bulges), `SPLINE` and `ELLIPSE` (flattened within
+//! [`ImportOptions::flatten_tolerance`] where not circular), `INSERT`/`MINSERT` of nested
+//! blocks, and the object coordinate system. Units come from `$INSUNITS` unless
+//! [`ImportOptions::units`] says otherwise; roles come from layer names
+//! ([`Role::from_layer_name`]); open pieces are joined by [`chain::chain`] per role. Bad input is
+//! an error, never a panic, and block expansion and flattening are bounded. The entities, units,
+//! layers and messages in full are in `docs/import.md`.
 
 use crate::chain::{self, Piece};
 use crate::contour::{Contour, Segment, Vertex};

@@ -1,113 +1,17 @@
 //! SVG reader: an `<svg>` document into closed [`Contour`]s in millimetres, circular arcs kept as
 //! arcs.
 //!
-//! # What is read
-//!
-//! The shape elements `path` (every command of the path grammar, absolute and relative, with
-//! implicit repeats), `rect` (with `rx`/`ry` rounded corners), `circle`, `ellipse`, `line`,
-//! `polyline` and `polygon`; the containers `g`, `a`, `switch` (its first child that needs no
-//! extension) and nested
-//! `svg` (with `x`, `y`, `width`, `height`, `viewBox` and `preserveAspectRatio`); and `use`
-//! (`href` or `xlink:href` to `#id`, including `symbol`s). Everything else is ignored: `defs`
-//! content (drawn only through `use`), `symbol`, `clipPath`, `mask`, `pattern`, `marker`, `text`,
-//! `image`, `metadata`, `style`, and elements outside the SVG namespace (`sodipodi:namedview`,
-//! `inkscape:*`, …). Elements with `display="none"` (attribute or `style`) are skipped with their
-//! whole subtree; elements with `visibility` `hidden`/`collapse` are skipped (a child may set
-//! `visible` again). Clipping, masks, strokes and CSS `<style>` sheets are not interpreted.
-//!
-//! Every closed subpath of every element becomes one [`Shape`], in document order. Degenerate
-//! closed subpaths (fewer than two vertices, or zero area, e.g. `M0 0 H10 Z`) are dropped, and so
-//! are elements that are not rendered (zero width, zero radius, a singular `transform`).
-//!
-//! # Coordinate mapping
-//!
-//! Every element's `transform` is composed down the tree (`rotate(a cx cy)`, `skewX`, `skewY`,
-//! `matrix`, … as in the SVG specification) and then mapped from the root's user space to
-//! millimetres:
-//!
-//! * `px` = `25.4 / opts.svg_px_per_inch` mm (96 px/in per CSS, 90 for Inkscape 0.47/0.48);
-//!   `mm`, `cm`, `in`, `pt` (1/72 in) and `pc` (1/6 in) are absolute. A root `width`/`height`
-//!   without a unit is in px; `%`, `em` and `ex` on the root count as absent.
-//! * With a root `viewBox`, the viewBox is fitted into the `width` × `height` viewport following
-//!   `preserveAspectRatio` (default `xMidYMid meet`). When only one of `width`/`height` is given
-//!   the other follows the viewBox's aspect ratio; when neither is, one user unit is one px.
-//! * Without a `viewBox`, one user unit is one px.
-//! * `opts.units = Some(u)` overrides all of that: one user unit is one `u` (the viewBox origin
-//!   still moves to the page corner), and lengths with absolute units inside the drawing are
-//!   converted with `u` too.
-//!
-//! The Y axis is flipped **about the bottom edge of the page** (the root viewport; the viewBox's
-//! bottom with a unit override): `y_cad = page_height − y_svg` in millimetres, so the page's
-//! bottom-left corner is the origin and the drawing reads as it does on screen, with Y up. Without
-//! any page height (no `height`, no `viewBox`), `y_cad = −y_svg`. The flip reverses the sign of
-//! orientation relative to SVG's own (y-down) coordinates, so arc directions and bulge signs are
-//! computed after the whole mapping: what looks clockwise on screen is clockwise (negative area,
-//! negative bulges) in the result — a `circle` or `rect` comes out clockwise — and an element
-//! under a mirroring transform (negative determinant) comes out with the opposite orientation.
-//! No orientation is imposed: nesting decides islands downstream.
-//!
-//! [`Drawing::units`] reports the unit of the root `width` (or `height`) when it is `mm`, `cm` or
-//! `in`, the override when one is given, and millimetres otherwise (px-based documents).
-//!
-//! # Arcs
-//!
-//! An elliptical arc (`A`, and the corners of a rounded `rect`, `circle`s and `ellipse`s, which
-//! are built from arcs) is converted from SVG's endpoint form to its centre form (SVG 1.1
-//! appendix F.6.5, with out-of-range radii scaled up as in F.6.6; an arc with a zero radius is a
-//! line, an arc to its own start point is omitted). Its image in millimetres is the ellipse
-//! `c + L·(cos θ, sin θ)`, where `L` = (composed transform) · rotate(φ) · diag(rx, ry). When the
-//! two singular values of `L` (the output semi-axes) differ by at most half the flatten
-//! tolerance — a circle under a similarity transform (uniform scale, rotation, mirror), or a
-//! near-circle within tolerance — the arc is kept exact: the transformed end points joined by
-//! bulge arcs, split into two arcs when it sweeps more than 180°. A full `circle` is therefore
-//! two half-circle arcs (bulge ±1).
-//!
-//! # Flattening bounds
-//!
-//! Everything else is replaced by straight lines no farther than `opts.flatten_tolerance` (mm)
-//! from the curve, in both directions (each point of the curve is that close to the matching
-//! point of its chord and the other way round), computed after the transform, in millimetres:
-//!
-//! * Cubic Béziers (quadratics are raised to cubics exactly) are split in halves by de Casteljau
-//!   until, for each piece `P0..P3`, `¾ · max(|P1 − (2P0+P3)/3|, |P2 − (P0+2P3)/3|) ≤ tol`.
-//!   That is a bound on `|B(t) − L(t)|`, where `L(t)` runs along the chord at the same
-//!   parameter: the difference is a Bézier with control points `0, D1, D2, 0`, and
-//!   `3t(1−t) ≤ ¾`.
-//! * Elliptical arcs that are not circles are cut into `n` equal parameter steps `h` with
-//!   `h ≤ √(8·tol/σ₁)`, σ₁ the larger output semi-axis: a chord differs from its curve by at most
-//!   `h²/8 · max|γ''|` and `|γ''| ≤ σ₁`.
-//!
-//! Safety caps keep hostile input bounded: at most 2¹⁶ pieces per Bézier and per arc (enough for
-//! a curve kilometres long at a micrometre), and ten million vertices per drawing (an error).
-//!
-//! # Open outlines
-//!
-//! A subpath closes with `Z`/`z` (a gap under 0.1 µm before it is merged rather than kept as a
-//! micro segment) or when its ends meet within `opts.chain_tolerance`. Open subpaths of all
-//! elements — including open `line`s and `polyline`s and whatever their `fill` — are chained
-//! together end to end (within `opts.chain_tolerance`), so a drawing made of loose lines works.
-//! An outline that stays open is refused with the element and the gap: a pocket needs a closed
-//! outline, and silently dropping a stroke could drop the one outline that mattered. Remove or
-//! hide (`display:none`) construction lines and open strokes before importing.
-//!
-//! # Roles and layers
-//!
-//! A shape inside a `g` whose `inkscape:label` or `id` is `STOCK`, `PART` or `FIXTURE` (any case,
-//! [`Role::from_layer_name`]; the nearest such group wins) gets that role, and [`Shape::layer`]
-//! is that name. Otherwise the role is [`Role::Auto`] and the layer is the nearest group's
-//! `inkscape:label`, else its `id`, else empty. [`Shape::origin`] names the element, as in
-//! `path id="path3" (line 12)`, with `, subpath 2` for paths with several subpaths and
-//! `via use id="u1" (line 30)` for instances.
-//!
-//! # Errors
-//!
-//! Text must be UTF-8 (or declared ISO-8859-1/Windows-1252 in the XML declaration).
-//!
-//! Never a panic: not UTF-8, not XML, an empty file, a root that is not `<svg>` (with line and
-//! column when known), an unparsable or non-finite number (the element and the attribute),
-//! geometry that overflows, `use` cycles or dangling references, nesting deeper than 128 levels,
-//! and a drawing without any closed contour ("no closed contour in the drawing") are all
-//! [`ImportError`]s.
+//! Every closed subpath of the shape elements (`path`, `rect`, `circle`, `ellipse`, `line`,
+//! `polyline`, `polygon`, through `g`, nested `svg`, `switch` and `use`) becomes one [`Shape`];
+//! each element's `transform` is composed down the tree and the root's user space mapped to
+//! millimetres (its units, `viewBox` and `preserveAspectRatio`, or [`ImportOptions::units`]),
+//! with Y flipped about the bottom edge of the page so that the drawing reads as on screen. Arcs
+//! that stay circular are kept exact as bulges (SVG 1.1 appendix F.6.5–F.6.6); other curves are
+//! flattened within [`ImportOptions::flatten_tolerance`] by proven bounds. Open subpaths are
+//! chained; an outline that stays open is refused with the element and the gap. Groups named
+//! `STOCK`, `PART` or `FIXTURE` give their role ([`Role::from_layer_name`]); every error is an
+//! [`ImportError`], never a panic. What is read and skipped, the coordinate mapping, arcs, the
+//! flattening bounds, open outlines, roles and errors are walked through in `docs/import.md`.
 
 use crate::chain::{Piece, chain, open_contour_message};
 use crate::contour::{Contour, Vertex};

@@ -1,11 +1,13 @@
-//! Redraws paper 2's figures (Elber, Cohen and Drake) on swarf's example cases (PNG, drawn as
-//! SVG and rendered by `swarf::plot::png`):
+//! Redraws paper 2's figures (Elber, Cohen and Drake) on swarf's example cases, as PNG (drawn as
+//! SVG and rendered by `swarf::plot::png`) and as the SVG that the medial strategy's module doc
+//! embeds (`figures/` under the output folder):
 //!
-//! - `medial_axis.png`: Fig. 1(b) in the plane — the medial axis of the tool-centre region of
-//!   `pocket_islands` (coloured by the radius of the maximal inscribed circle) and the circles
-//!   placed along it a Hausdorff stepover apart;
-//! - `medial_shapes.png`: Fig. 1(c) against Fig. 2(c) — the program of `l_pocket` with every
-//!   circle followed all the way round, and with the cut-back return, side by side.
+//! - `medial_axis.png`, `figures/medial_axis.svg`: Fig. 1(b) in the plane — the medial axis of
+//!   the tool-centre region of `pocket_islands` (coloured by the radius of the maximal inscribed
+//!   circle) and the circles placed along it a Hausdorff stepover apart;
+//! - `medial_shapes.png`, `figures/medial_shapes.svg`: Fig. 1(c) against Fig. 2(c) — the program
+//!   of `l_pocket` with every circle followed all the way round, and with the cut-back return,
+//!   side by side.
 //!
 //! ```sh
 //! cargo run --release -p swarf --example medial_figures -- docs
@@ -14,6 +16,7 @@
 use std::fmt::Write;
 use std::path::Path;
 use swarf::geom::medial::medial_axis;
+use swarf::geom::simplify::{douglas_peucker, douglas_peucker_ring};
 use swarf::geom::{Area, DVec2};
 use swarf::job::rough::{RoughOptions, rough};
 use swarf::plan::{LayerGeom, LinkOptions};
@@ -24,7 +27,8 @@ use swarf::toolpath::{Motion, MoveKind, Toolpath};
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = std::env::args().nth(1).unwrap_or_else(|| "docs".into());
     let cases = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cases");
-    std::fs::create_dir_all(&out)?;
+    let out = Path::new(&out);
+    std::fs::create_dir_all(out.join("figures"))?;
 
     // the axis and the circles
     let job = swarf::io::load_job(&cases.join("pocket_islands.json"), &Default::default())?;
@@ -39,26 +43,41 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     p.area(&job.part, "#3a3a3a", "none");
     p.area(&c, "none", "#999999");
     let rmax = axis.nodes.iter().map(|n| n.r).fold(0.0, f64::max);
+    p.body.push_str(r##"<g fill="none" stroke="#c8c8c8" stroke-width="0.6">"##);
     for run in &rs {
         for k in &run.circles {
-            p.circle(k.c, k.rho, "#c8c8c8", 0.6);
+            p.circle(k.c, k.rho);
         }
     }
+    p.body.push_str("</g>\n");
+    // one path per shade (eight of them), each run of a shade simplified to a quarter of a pixel
+    let shade = |w: &[f64]| (0.5 * (w[0] + w[1]) / rmax * 8.0).round() as usize;
+    let mut shades = vec![String::new(); 9];
     for e in &axis.edges {
-        for w in e.pts.windows(2).zip(e.rad.windows(2)) {
-            let t = 0.5 * (w.1[0] + w.1[1]) / rmax;
-            p.line(w.0[0], w.0[1], &ramp(t), 2.0, "");
+        let mut from = 0;
+        for i in 1..e.pts.len() {
+            let t = shade(&e.rad[i - 1..=i]);
+            if i + 1 == e.pts.len() || shade(&e.rad[i..=i + 1]) != t {
+                let run = douglas_peucker(&e.pts[from..=i], 0.25 / p.scale);
+                shades[t].push_str(&p.polyline(&run));
+                from = i;
+            }
         }
+    }
+    for (t, d) in shades.iter().enumerate().filter(|(_, d)| !d.is_empty()) {
+        let _ = writeln!(p.body, r#"<path d="{d}" fill="none" stroke="{}" stroke-width="2"/>"#, ramp(t as f64 / 8.0));
     }
     let first = rs[0].circles[0];
-    p.circle(first.c, first.rho, "#c0392b", 1.5);
+    p.body.push_str(r##"<g fill="none" stroke="#c0392b" stroke-width="1.5">"##);
+    p.circle(first.c, first.rho);
+    p.body.push_str("</g>\n");
     let n: usize = rs.iter().map(|r| r.circles.len()).sum();
     let title = format!(
         "pocket_islands: the medial axis of the tool-centre region (colour: inscribed radius, up to {rmax:.1} mm),\n\
          {n} circles a Hausdorff stepover ({:.1} mm) apart; red: the largest, where the tool enters",
         geom.step
     );
-    std::fs::write(Path::new(&out).join("medial_axis.png"), swarf::plot::png(&doc(&title, 760.0, &[p]))?)?;
+    write(out, "medial_axis", &doc(&title, 760.0, &[p]))?;
 
     // full circles against the cut-back return
     let job = swarf::io::load_job(&cases.join("l_pocket.json"), &Default::default())?;
@@ -79,7 +98,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ));
     }
     let title = format!("l_pocket, medial strategy\n{}", names.join("    "));
-    std::fs::write(Path::new(&out).join("medial_shapes.png"), swarf::plot::png(&doc(&title, 1240.0, &panels))?)?;
+    write(out, "medial_shapes", &doc(&title, 1240.0, &panels))?;
+    Ok(())
+}
+
+/// Writes `NAME.png` into `out` and `NAME.svg` into `out/figures`, the SVG scaled to the width
+/// of the page it is shown on (a module doc).
+fn write(out: &Path, name: &str, svg: &str) -> Result<(), Box<dyn std::error::Error>> {
+    std::fs::write(out.join(format!("{name}.png")), swarf::plot::png(svg)?)?;
+    let fluid = svg.replacen("<svg ", r#"<svg style="max-width:100%;height:auto" "#, 1);
+    std::fs::write(out.join("figures").join(format!("{name}.svg")), fluid)?;
     Ok(())
 }
 
@@ -90,7 +118,8 @@ fn ramp(t: f64) -> String {
     format!("#{:02x}{:02x}{:02x}", r as u8, g as u8, b as u8)
 }
 
-/// One drawing, the stock's bounds fitted into a square `size` wide at `x0`.
+/// One drawing, the stock's bounds fitted into a square `size` wide at `x0`. Coordinates are
+/// written to a tenth of a pixel, which keeps the SVG small.
 struct Panel {
     body: String,
     lo: DVec2,
@@ -111,57 +140,65 @@ impl Panel {
     fn at(&self, q: DVec2) -> (f64, f64) {
         (self.x0 + (q.x - self.lo.x) * self.scale, 40.0 + self.h - (q.y - self.lo.y) * self.scale)
     }
+    /// `x,y` of a point on the page.
+    fn xy(&self, q: DVec2) -> String {
+        let (x, y) = self.at(q);
+        format!("{x:.1},{y:.1}")
+    }
     fn area(&mut self, a: &Area, fill: &str, stroke: &str) {
         let mut d = String::new();
         for ring in a.rings() {
-            for (i, q) in ring.iter().enumerate() {
-                let (x, y) = self.at(*q);
-                let _ = write!(d, "{}{x:.2},{y:.2} ", if i == 0 { "M" } else { "L" });
+            for (i, q) in douglas_peucker_ring(ring, 0.1 / self.scale).iter().enumerate() {
+                let _ = write!(d, "{}{}", if i == 0 { "M" } else { " " }, self.xy(*q));
             }
             d.push('Z');
         }
         let _ = writeln!(self.body, r#"<path d="{d}" fill="{fill}" fill-rule="evenodd" stroke="{stroke}"/>"#);
     }
-    fn line(&mut self, a: DVec2, b: DVec2, color: &str, width: f64, dash: &str) {
-        let ((x1, y1), (x2, y2)) = (self.at(a), self.at(b));
-        let _ = writeln!(
-            self.body,
-            r#"<line x1="{x1:.2}" y1="{y1:.2}" x2="{x2:.2}" y2="{y2:.2}" stroke="{color}" stroke-width="{width}" {dash}/>"#
-        );
+    /// The path data of a polyline.
+    fn polyline(&self, pts: &[DVec2]) -> String {
+        let pts: Vec<String> = pts.iter().map(|q| self.xy(*q)).collect();
+        format!("M{}", pts.join(" "))
     }
-    fn circle(&mut self, c: DVec2, r: f64, color: &str, width: f64) {
+    /// A circle, its stroke set by the enclosing group.
+    fn circle(&mut self, c: DVec2, r: f64) {
         let (x, y) = self.at(c);
-        let r = r * self.scale;
-        let _ = writeln!(
-            self.body,
-            r#"<circle cx="{x:.2}" cy="{y:.2}" r="{r:.2}" fill="none" stroke="{color}" stroke-width="{width}"/>"#
-        );
+        let _ = write!(self.body, r#"<circle cx="{x:.1}" cy="{y:.1}" r="{:.1}"/>"#, r * self.scale);
     }
     /// The program's XY moves at depth: cutting in blue, rapids dotted.
     fn path(&mut self, tp: &Toolpath) {
+        let (mut cut, mut rapid) = (String::new(), String::new());
         let mut from = tp.moves.first().map(|m| m.to).unwrap_or_default();
+        let mut down = false;
         for m in &tp.moves {
             let (a, b) = (from.truncate(), m.to.truncate());
             from = m.to;
             if m.kind == MoveKind::Rapid {
-                self.line(a, b, "#c0392b", 0.8, r#"stroke-dasharray="3,3""#);
+                let _ = write!(rapid, "M{}L{}", self.xy(a), self.xy(b));
+                down = false;
                 continue;
             }
+            if !down {
+                let _ = write!(cut, "M{}", self.xy(a));
+                down = true;
+            }
             match m.motion {
-                Motion::Line => self.line(a, b, "#2c50c8", 0.7, ""),
+                Motion::Line => {
+                    let _ = write!(cut, "L{}", self.xy(b));
+                }
                 Motion::Arc { center, ccw } => {
-                    let (x1, y1) = self.at(a);
-                    let (x2, y2) = self.at(b);
                     let r = (a - center).length() * self.scale;
                     // y is flipped on the page: a counter-clockwise arc is drawn clockwise
                     let sweep = if ccw { 1 } else { 0 };
-                    let _ = writeln!(
-                        self.body,
-                        r##"<path d="M{x1:.2},{y1:.2} A{r:.2},{r:.2} 0 0 {sweep} {x2:.2},{y2:.2}" fill="none" stroke="#2c50c8" stroke-width="0.7"/>"##
-                    );
+                    let _ = write!(cut, "A{r:.1},{r:.1} 0 0 {sweep} {}", self.xy(b));
                 }
             }
         }
+        let _ = writeln!(self.body, r##"<path d="{cut}" fill="none" stroke="#2c50c8" stroke-width="0.7"/>"##);
+        let _ = writeln!(
+            self.body,
+            r##"<path d="{rapid}" fill="none" stroke="#c0392b" stroke-width="0.8" stroke-dasharray="3,3"/>"##
+        );
     }
 }
 

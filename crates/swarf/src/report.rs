@@ -94,6 +94,10 @@ pub struct Report {
     pub compute_s: f64,
     /// Time to simulate it for this report (s).
     pub simulate_s: f64,
+    /// Whether the program was simulated. Without a simulation (`--no-simulate`) the
+    /// simulation's figures (engagement, air cutting, gouges, rapid collisions, rest) were not
+    /// measured and read 0, and `plunges` counts the plunges the program marks.
+    pub simulated: bool,
     /// Feed-move length, mm.
     pub cut_length_mm: f64,
     /// Rapid length, mm.
@@ -151,14 +155,34 @@ pub struct Report {
     pub sim_res_mm: f64,
 }
 
-/// Fills the simulation figures of a report.
-pub fn fill(rep: &mut Report, tp: &Toolpath, replay: &Replay, rest: &Rest, rapid_rate: f64) {
+/// Fills the figures of a report that the program gives by itself: lengths, time, entries,
+/// retracts, the moves by kind, and plunges as the program marks them (the simulation replaces
+/// those by the plunges into material it finds, see [`fill`]).
+pub fn fill_program(rep: &mut Report, tp: &Toolpath, rapid_rate: f64) {
     let t = tp.totals(rapid_rate);
     rep.cut_length_mm = t.cut_length_mm;
     rep.rapid_length_mm = t.rapid_length_mm;
     rep.time_min = t.time_min;
     rep.entries = t.entries;
     rep.retracts = t.retracts;
+    rep.plunges = t.plunges;
+    let mut c = Counts { total: tp.moves.len(), ..Default::default() };
+    for m in &tp.moves {
+        if m.is_rapid() {
+            c.rapids += 1;
+        } else if matches!(m.motion, Motion::Arc { .. }) {
+            c.arcs += 1;
+        } else {
+            c.lines += 1;
+        }
+    }
+    rep.moves = c;
+}
+
+/// Fills every figure of a report: the program's ([`fill_program`]) and the simulation's.
+pub fn fill(rep: &mut Report, tp: &Toolpath, replay: &Replay, rest: &Rest, rapid_rate: f64) {
+    fill_program(rep, tp, rapid_rate);
+    rep.simulated = true;
     let lateral: Vec<_> = replay.samples.iter().filter(|s| s.kind == SampleKind::Lateral).collect();
     rep.engagement_lateral_deg = Stats::of(lateral.iter().map(|s| s.tea as f64).collect());
     rep.engagement_deg = Stats::of(lateral.iter().filter(|s| !s.bore).map(|s| s.tea as f64).collect());
@@ -194,17 +218,6 @@ pub fn fill(rep: &mut Report, tp: &Toolpath, replay: &Replay, rest: &Rest, rapid
     rep.reachable_area_mm2 = rest.reachable_mm2;
     rep.rest_fraction = if rest.reachable_mm2 > 0.0 { rest.area_mm2 / rest.reachable_mm2 } else { 0.0 };
     rep.removed_volume_mm3 = replay.removed_volume;
-    let mut c = Counts { total: tp.moves.len(), ..Default::default() };
-    for m in &tp.moves {
-        if m.is_rapid() {
-            c.rapids += 1;
-        } else if matches!(m.motion, Motion::Arc { .. }) {
-            c.arcs += 1;
-        } else {
-            c.lines += 1;
-        }
-    }
-    rep.moves = c;
 }
 
 #[cfg(test)]

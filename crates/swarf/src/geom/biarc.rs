@@ -1,21 +1,12 @@
 //! Biarcs: a smooth curve known by points and unit tangents, written as circular arcs that
 //! meet tangentially (G1), for G2/G3 programs that are C1 by construction.
 //!
-//! Between two points P₀, P₁ with unit tangents T₀, T₁, a biarc is two arcs: the first leaves
-//! P₀ along T₀, the second arrives at P₁ along T₁, and they share their tangent at the joint J.
-//! With the two control lengths equal (d₁ = d₂ = d), the control points Q₀ = P₀ + d·T₀ and
-//! Q₁ = P₁ − d·T₁ are 2d apart and J is their midpoint; with v = P₁ − P₀ and t = T₀ + T₁,
-//! |v − d·t|² = 4d² gives (t·t − 4)·d² − 2(v·t)·d + v·v = 0, whose positive root is taken
-//! (the "equal chord" biarc of Bolton 1975 and Meek & Walton 1992).
-//!
-//! [`fit`] walks a dense polyline (a curve sampled finely, such as an integrated trajectory)
-//! with a unit tangent at each point (the curve's own where its maker knows them, else by
-//! central differences, [`tangents`]), and covers it with biarcs, each as long
-//! as the polyline stays within the tolerance of it (checked at every point it spans); where
-//! that makes arcs shorter than a wanted length, a span may be widened if the points then lie
-//! within a looser tolerance on one chosen side of the biarc ([`Tolerance`]). Written
-//! here because arc fitting that keeps tangency between pieces is not in any of the geometry
-//! crates this project uses (`arcfit` fits arcs greedily, without tangency between them).
+//! Between two points with unit tangents a biarc is two arcs sharing their tangent at the
+//! joint, here the "equal chord" biarc of Bolton 1975 and Meek & Walton 1992 ([`biarc`]);
+//! [`fit`] covers a dense polyline with tangents by biarcs, each as long as the polyline stays
+//! within the tolerance of it, widened where arcs would be too short if the points then lie
+//! within a looser tolerance on one side ([`Tolerance`]). The construction and the reasons are
+//! in `docs/geometry.md`.
 
 use super::DVec2;
 use super::arcfit::Piece;

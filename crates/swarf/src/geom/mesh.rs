@@ -12,7 +12,7 @@
 //! from the edge's two end points taken in a fixed order, so neighbouring facets share the cut
 //! points bit for bit.
 //!
-//! The part's height map, which the simulators read, is [`crate::sim::heights::height_map`].
+//! The part's height map, which the simulators read, is `sim::heights::height_map`.
 
 use super::area::Fill;
 use super::{Area, DVec2, DVec3};

@@ -5,7 +5,7 @@
 //! booleans, offsets, strokes and polyline clipping go through one thin adapter over the
 //! `i_overlay` crate ([`area`]), whose integer core is robust against the coincident edges that
 //! CAM inputs are full of (a part frame whose hole is exactly the stock outline, for one). Arcs
-//! come back at the output: [`arcfit`] turns tool-centre polylines into G2/G3 arcs within a
+//! come back at the output: `arcfit` turns tool-centre polylines into G2/G3 arcs within a
 //! tolerance.
 
 #[doc(hidden)]

@@ -47,6 +47,16 @@ impl Grid {
         Grid { lo, step, nx, ny, vals }
     }
 
+    /// `field` over its bounds padded by 2 % each side, about 256 cells along the longer side:
+    /// the grid the oscillator's ζ table ([`super::oscillator`]) and the spiral strategy's core
+    /// level read their level sets from (one grid serves both, and every spiral from the same
+    /// field). `None` for an unbounded field.
+    pub fn of_field(field: &dyn Field) -> Option<Grid> {
+        let (lo, hi) = field.bounds()?;
+        let pad = (hi - lo) * 0.02;
+        Some(Grid::sample(field, lo - pad, hi + pad, 256))
+    }
+
     fn at(&self, i: usize, j: usize) -> Dual {
         self.vals[j * (self.nx + 1) + i]
     }

@@ -9,11 +9,21 @@
 //!
 //! - [`rfunc`]: the R-function families `R_α`, `R_0^m`, `R_p` (eqs. 6–8) on values with gradients;
 //! - [`shape`]: a small shape language (circle, half-plane, box, polygon, and/or/not) with a JSON
-//!   file format, the implicit function of any [`crate::geom::Area`], the natural start point
-//!   (the maximum of `f`), and drawings of level sets;
+//!   file format, and the natural start point (the maximum of `f`) ([`crate::plot::shape`]
+//!   draws the level sets);
+//! - [`region`]: the implicit function of any [`crate::geom::Area`] (an approximate distance
+//!   field);
 //! - [`oscillator`]: the damped oscillator integrated in arc length (Dormand–Prince 5(4)), with ζ
 //!   constant or chosen per level so that successive turns stay within a stepover, ending with
 //!   one turn along the boundary level.
+//!
+//! The walk-through of all four is in `docs/implicit.md`; the strategy that cuts pockets with
+//! them is [`crate::strategy::spiral`].
+//!
+#![doc = include_str!("../../../../docs/figures/spiral_shape.svg")]
+//!
+//! *An R-function shape (`examples/shapes/disk_minus_slot.json`), its level sets and its spiral,
+//! drawn by the `spiral_figures` example.*
 
 #[doc(hidden)]
 pub mod levels;

@@ -1,66 +1,14 @@
 //! The damped oscillator of Kalmar-Nagy & Erdim (§2, eqs. 3–6), integrated as a plane curve: a
 //! spiral from the maximum of `f` out to a level `f_end`, then one turn along that level.
 //!
-//! # From eq. 6 to a well-posed direction field
-//!
-//! With `x` the position and `y = ẋ` the velocity, eq. 6 reads
-//! `f_x y + f_y (ẏ − 2ζy) = 0`, i.e. `ẋ = y`, `ẏ = y (2ζ − f_x / f_y)`. Its velocity is
-//!
-//! ```text
-//! (ẋ, ẏ) = (y / f_y) · [ (f_y, −f_x) + 2ζ f_y (0, 1) ],
-//! ```
-//!
-//! a conservative part along the level-set tangent `(f_y, −f_x)` (eq. 5: `df/dt = 0`) plus the
-//! damping part `2ζ y (0, 1)`, with `df/dt = 2ζ y f_y`. The time factor `y / f_y` is what makes
-//! eq. 6 singular where `f_y = 0` away from the origin; the *curve* does not depend on it. So the
-//! curve is integrated in arc length `s` with a unit direction made of the level-set tangent `t̂`
-//! and an outward drift along `n̂ = −∇f / |∇f|`.
-//!
-//! The damping part of eq. 6 is direction dependent (it acts on the velocity coordinate only):
-//! on the disk `f = 1 − x² − y²` of eq. 1 (where eq. 6 is eq. 3, `ẍ − 2ζẋ + x = 0`), in polar
-//! coordinates `ṙ = 2ζ r sin²φ` and `φ̇ = −1 + ζ sin 2φ`, so the drift per radian is
-//! `dr / (r dφ) = 2ζ sin²φ + O(ζ²)`, whose average over a turn is `ζ`. The direction used here
-//! is that average made isotropic:
-//!
-//! ```text
-//! dp/ds = (t̂ + ζ n̂) / √(1 + ζ²),      so   dr / (r dθ) = ζ   on any disk,
-//! ```
-//!
-//! which is exactly the logarithmic spiral `r = r₀ e^{ζθ}` (growth `e^{2πζ}` per turn; eq. 3's
-//! own solution grows by `e^{2πζ/√(1 − ζ²)}` per period, the same to first order), and on any
-//! field it is regular wherever `∇f ≠ 0`, whatever the sign of `f_y`. Turning sense: `t̂ = ∇f`
-//! turned clockwise by 90° goes counter-clockwise around the maximum (climb milling for a
-//! clockwise spindle moving outward), the opposite `t̂` goes clockwise. The sense of eq. 3's
-//! trajectory in the `(x, ẋ)` plane is clockwise.
-//!
-//! # ζ per level: the stepover
-//!
-//! Along the curve `df/ds = −ζ |∇f| / √(1 + ζ²)`, so one turn along (about) the level `c` lowers
-//! `f` by `Δc ≈ ζ F(c)` with the flux `F(c) = ∮_{f=c} |∇f| ds`, and the gap to the previous turn at
-//! a point is `Δc / |∇f|`. Taking `ζ(c) = s · w · g_min(c) / F(c)` (`g_min` the smallest `|∇f|` on
-//! the level, `s < 1` a safety factor) bounds every gap by `s · w`. On a disk this is `ζ = w / 2πr`
-//! and the spiral is Archimedean with spacing exactly `s·w`. With an engagement limit
-//! ([`SpiralOptions::engagement`]) the gap allowed at each point of a level is also held to
-//! [`engagement_spacing`] at the level's curvature there, so `ζ(c) = s · min(w_here |∇f|) / F(c)`. The estimate is linear and the
-//! table conservative, so [`spiral`] measures the result ([`max_turn_spacing`]) and rescales ζ
-//! (at most five runs), keeping the widest spiral whose measured spacing is within `w`. `F` and `g_min` are tabulated once
-//! per spiral from the level sets of a grid (marching squares, [`super::levels::Grid`]); between
-//! table levels the smaller ζ of the two neighbours is used. ζ is held constant through each
-//! integration step and updated between steps, which the error control never sees.
-//!
-//! # Integration
-//!
-//! Dormand–Prince 5(4) with the usual error control (`rtol` on coordinates relative to the start
-//! point, `atol`), a step limit, and a limit of 0.25 rad of direction change per step so that the
-//! returned polyline (the accepted points) follows the curve closely. It is written here: the
-//! registry cache of the project has no ODE crate, and this problem needs what general solvers
-//! make awkward (a parameter changed between steps, an event located by re-stepping).
-//!
-//! When `f` reaches `f_end` (located by regula falsi on the step length) the drift is replaced by
-//! a relaxation onto the level, `dp/ds ∝ t̂ + clamp(λ (f − f_end) / |∇f|) n̂`, and the curve runs
-//! until its tangent has turned by 2π: one closed turn along the boundary offset. Stalls are typed
-//! errors: a vanishing gradient, a step below 1e-12 of the field's size, a turn that lowers `f` by
-//! nothing, and limits on turns and steps.
+//! Eq. 6 is singular where `f_y = 0` but its curve is not, so the curve is integrated in arc
+//! length along `dp/ds = (t̂ + ζ n̂) / √(1 + ζ²)`, the level-set tangent plus an outward drift
+//! (on a disk, the logarithmic spiral `r = r₀ e^{ζθ}`). ζ is constant or chosen per level,
+//! `ζ(c) = s · w · g_min(c) / F(c)`, so that successive turns are at most a stepover `w` apart
+//! (and within [`engagement_spacing`] where they curve tightly); [`spiral`] measures the result
+//! ([`max_turn_spacing`]) and rescales ζ. The integrator is Dormand–Prince 5(4) with error
+//! control; at `f_end` a relaxation onto the level gives the closing turn. The derivation from
+//! eq. 6, the choice of ζ and the integration are in `docs/implicit.md`.
 
 // `!(x > y)` is meant: a NaN must fail every check
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -307,8 +255,24 @@ fn dp_step(rhs: &mut Rhs, y: DVec2, k1: DVec2, h: f64, phase: Phase) -> Result<S
 /// must be bounded ([`Field::bounds`]). Errors (typed, never a hang): an unbounded field, bad
 /// options, `f(start) ≤ f_end`, a vanishing gradient, a stalled or endless spiral.
 pub fn spiral(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<Spiral> {
+    spiral_on(field, start, opts, None)
+}
+
+/// [`spiral`], with the samples of `field` its ζ per level reads level sets from, when the
+/// caller has them: `grid` must be [`Grid::of_field`] of the same field (it is sampled here,
+/// once for all the spiral's tries, when not given).
+pub fn spiral_on(field: &dyn Field, start: DVec2, opts: &SpiralOptions, grid: Option<&Grid>) -> Result<Spiral> {
     let Damping::Stepover { w, .. } = opts.damping else {
-        return spiral_once(field, start, opts, 1.0);
+        return spiral_once(field, start, opts, 1.0, None);
+    };
+    let sampled;
+    let grid = match grid {
+        Some(g) => Some(g),
+        None if field.bounds().is_some_and(|(lo, hi)| (hi - lo).length().is_finite() && (hi - lo).length() > 0.0) => {
+            sampled = Grid::of_field(field);
+            sampled.as_ref()
+        }
+        None => None,
     };
     // the per-level ζ rests on a linear estimate of the gap (and a conservative table): where
     // levels bend (rounded corners, tongues into narrow parts) the real gap can be larger, and
@@ -316,7 +280,7 @@ pub fn spiral(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<S
     let mut gain = 1.0;
     let mut best: Option<Spiral> = None;
     for _ in 0..5 {
-        let s = spiral_once(field, start, opts, gain)?;
+        let s = spiral_once(field, start, opts, gain, grid)?;
         let m = s.max_spacing;
         log::debug!("spiral gain {gain:.4}: {:.1} turns, length {:.1}, max spacing {m:.4} (w {w})", s.turns, s.length);
         let ok = m <= opts.accept_gap.unwrap_or(w);
@@ -332,11 +296,19 @@ pub fn spiral(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<S
     }
     match best {
         Some(s) => Ok(s),
-        None => spiral_once(field, start, opts, gain),
+        None => spiral_once(field, start, opts, gain, grid),
     }
 }
 
-fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64) -> Result<Spiral> {
+/// One spiral with ζ per level scaled by `gain`; `grid`: [`Grid::of_field`] of `field`, or
+/// `None` to sample it here.
+fn spiral_once(
+    field: &dyn Field,
+    start: DVec2,
+    opts: &SpiralOptions,
+    gain: f64,
+    grid: Option<&Grid>,
+) -> Result<Spiral> {
     let (lo, hi) = field.bounds().ok_or_else(|| Error::job("spiral", "the shape is unbounded"))?;
     let size = (hi - lo).length();
     if !(size > 0.0) || !size.is_finite() {
@@ -375,7 +347,26 @@ fn spiral_once(field: &dyn Field, start: DVec2, opts: &SpiralOptions, gain: f64)
     let h_min = size * 1e-12;
     let table = match opts.damping {
         Damping::Stepover { w, safety, zeta_min, zeta_max } => {
-            Some(ZetaTable::new(field, lo, hi, opts.f_end, f0, gain * safety * w, zeta_min, zeta_max, opts.engagement))
+            let sampled;
+            let grid = match grid {
+                Some(g) => g,
+                None => {
+                    sampled = Grid::of_field(field).ok_or_else(|| Error::job("spiral", "the shape is unbounded"))?;
+                    &sampled
+                }
+            };
+            Some(ZetaTable::new(
+                grid,
+                field,
+                lo,
+                hi,
+                opts.f_end,
+                f0,
+                gain * safety * w,
+                zeta_min,
+                zeta_max,
+                opts.engagement,
+            ))
         }
         Damping::Constant(_) => None,
     };
@@ -600,6 +591,7 @@ impl ZetaTable {
     /// κ = div(−∇f/|∇f|) by central differences.
     #[allow(clippy::too_many_arguments)]
     fn new(
+        grid: &Grid,
         field: &dyn Field,
         lo: DVec2,
         hi: DVec2,
@@ -610,8 +602,6 @@ impl ZetaTable {
         zmax: f64,
         eng: Option<EngagementLimit>,
     ) -> ZetaTable {
-        let pad = (hi - lo) * 0.02;
-        let grid = Grid::sample(field, lo - pad, hi + pad, 256);
         let h = 1e-4 * (hi - lo).length();
         let normal = |p: DVec2| -field.eval(p).g.normalize_or_zero();
         let allowed = |p: DVec2, g: f64| {

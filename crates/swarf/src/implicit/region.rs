@@ -1,41 +1,11 @@
 //! The implicit function of any [`Area`] (polygons with holes): [`AreaField`].
 //!
-//! # Which function
-//!
-//! The oscillator of Kalmar-Nagy & Erdim (§2) follows level sets of `f`, so `f` should be
-//! *smooth* inside (its level sets are the path), *exactly zero* on the boundary (the last turn
-//! tracks it) and *normalised* there (`|∇f| = 1`, so that a level `f = c` near the boundary is the
-//! offset at distance `c`, and a stepover in mm is a step in `f`).
-//!
-//! The signed distance is normalised but its level sets have the sharp corners of inward offsets
-//! and its gradient jumps across the medial axis. A Boolean R-function tree over edge half-planes
-//! (Rvachev) needs a monotone decomposition of each non-convex polygon. Instead this module uses
-//! the *approximate distance field* of Biswas & Shapiro (the transfinite "R-equivalence" of all
-//! boundary pieces, written as one integral so that it does not depend on how a ring is split
-//! into segments):
-//!
-//! ```text
-//! I(p) = ∫_∂S |p − q|⁻³ dq,        φ(p) = (I(p) / 2)^(−1/2),        f = ±φ (+ inside).
-//! ```
-//!
-//! Near an edge at distance d the edge dominates, `I ≈ 2/d²` (the integral over a whole line),
-//! so `φ ≈ d`: `f` is zero exactly on the boundary and normalised there; away from it `f` is
-//! C^∞ (it is a sum of smooth kernels), its level sets round the convex corners, and it stays
-//! positive inside whatever the topology (holes included). Each segment's integral has a closed
-//! form, `[x / (d² √(d² + x²))]` between the ends in the segment's own coordinates, evaluated in
-//! a cancellation-free form when the foot of the perpendicular falls outside the segment.
-//!
-//! # Speed
-//!
-//! The sum over segments is a Barnes–Hut tree walk: a bounding-volume tree over the segments
-//! (median splits, ≤ 4 per leaf) stores each node's length `L`, length-weighted centroid `c` and
-//! radius `ρ` and second moment `Q`; a node seen at an opening ratio `r = ρ / |p − c|` below 0.2
-//! counts as its multipole expansion to second order (`L / |p − c|³` plus the quadrupole term of
-//! `Q`; the dipole term vanishes about the centroid), exact up to O(r³), above 0.35 it is opened,
-//! and in between the two are blended with a C¹ smoothstep
-//! in `r`, so `f` stays C¹ (an ODE integrator with error control sees no jump). The segment
-//! nearest to `p` is always opened exactly, so the zero set and the normalisation are exact. The
-//! inside test walks the same tree with a ray to +x. A query costs O(log n) kernel evaluations.
+//! It is the approximate distance field of Biswas & Shapiro, `f = ±(I / 2)^(−1/2)` with
+//! `I(p) = ∫_∂S |p − q|⁻³ dq` (+ inside): smooth inside, exactly zero and normalised
+//! (`|∇f| = 1`) on the boundary, as the oscillator of Kalmar-Nagy & Erdim (§2) needs, with a
+//! closed form per segment, summed by a Barnes–Hut tree walk (O(log n) per query) blended so
+//! that `f` stays C¹. Why this function and not the signed distance or an R-function tree, the
+//! closed form and the tree are in `docs/implicit.md`.
 
 // `!(x > y)` is meant: a NaN must fail every check
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

@@ -2,34 +2,13 @@
 //! functions whose sign is fixed by the signs of their arguments, so that a Boolean formula over
 //! implicit shapes (positive inside) becomes one implicit function of the whole shape.
 //!
-//! Three families, each a conjunction (−, "and") and a disjunction (+, "or") pair; negation is
-//! the change of sign in every family:
-//!
-//! - `R_α` (eq. 6): `(a + b ∓ √(a² + b² − 2αab)) / (1 + α)` with `−1 < α ≤ 1`. The paper prints
-//!   the product under the root as `2α a² b²`, which is not homogeneous and does not give min/max
-//!   at α = 1; Rvachev's form `2αab` does (`√((a − b)²) = |a − b|`), and that is what is used.
-//!   α = 1 is `min`/`max`; α = 0 is analytic except at `a = b = 0`. The root is evaluated as
-//!   `√((a − b)² + 2(1 − α)ab)`, exact at α = 1.
-//! - `R_0^m` (eq. 7): `(a + b ∓ √(a² + b²)) (a² + b²)^{m/2}`, m times differentiable at the origin.
-//!   The paper takes m even; the sign argument holds for every m ≥ 0 (the factor is positive), so
-//!   any m is accepted. Only m = 0 is normalised (see below).
-//! - `R_p` (eq. 8): `a + b ∓ (a^p + b^p)^{1/p}` with p even, evaluated as `M (u^p + v^p)^{1/p}`
-//!   with `M = max(|a|, |b|)` so large p cannot overflow.
-//!
-//! Every function here works on [`Dual`] numbers (a value and its gradient in the plane), so the
-//! composed implicit function comes with its exact gradient by the chain rule; the oscillator of
-//! [`super::oscillator`] needs `∇f`.
-//!
-//! **Degenerate points.** At `a = b = 0` the root is not differentiable. The value is 0 in every
-//! family; the gradient returned is the limit along the diagonal `a = b > 0` (each family is
-//! homogeneous, so its partial derivatives depend only on the direction `(a : b)`): for `R_α`,
-//! `∂/∂a = ∂/∂b = (1 ∓ √((1 − α)/2)) / (1 + α)` (α = 1 gives the average of the two gradients, the
-//! middle of min's subdifferential); for `R_p`, `1 ∓ 2^{1/p − 1}`; for `R_0^m`, 0 when m > 0. No
-//! NaN comes out of any finite input.
-//!
-//! **Normalisation.** `R_α` (every α) and `R_p` keep a normalised argument normalised: where
-//! `b = 0 < a`, `∂/∂a = 0` and `∂/∂b = 1`, so `∇(a ∧ b) = ∇b` on b's part of the boundary. `R_0^m`
-//! with m > 0 multiplies by `|a|^m` there.
+//! Three families of conjunction ("and") and disjunction ("or") pairs, negation being the change
+//! of sign: `R_α` (eq. 6, with Rvachev's `2αab` under the root where the paper prints
+//! `2α a² b²`), `R_0^m` (eq. 7) and `R_p` (eq. 8). They work on [`Dual`] numbers, so the composed
+//! function carries its exact gradient (the oscillator needs `∇f`); at the degenerate point
+//! `a = b = 0` the gradient is the limit along the diagonal, never NaN; `R_α` and `R_p` keep a
+//! normalised argument normalised. The formulas, the degenerate points and the normalisation
+//! are in `docs/implicit.md`.
 
 use crate::geom::DVec2;
 use std::ops::{Add, Div, Mul, Neg, Sub};

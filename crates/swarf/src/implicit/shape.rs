@@ -2,20 +2,10 @@
 //! is positive inside, zero on the boundary and normalised there (`|∇f| = 1`), combined by the
 //! R-functions of [`super::rfunc`].
 //!
-//! Primitives:
-//!
-//! - circle of centre `c` and radius `r`: `(r² − |p − c|²) / (2r)`, a polynomial, normalised on
-//!   the circle and smooth everywhere (the signed distance `r − |p − c|` is not, at `c`);
-//! - half-plane through `p` with inward normal `n`: `n̂ · (q − p)`;
-//! - box, axis-aligned or rotated: the `R_0` conjunction of two slabs `(h² − u²) / (2h)` in the
-//!   box's own axes, whatever family the file chooses (so the primitive is always normalised and
-//!   analytic except at its four corners);
-//! - polygon: its signed distance, positive inside (normalised everywhere, only continuous across
-//!   its medial axis); for large polygons and polygons with holes use [`super::region::AreaField`].
-//!
-//! And / Or / Not apply the shape's [`RFamily`]; n-ary forms fold left.
-//!
-//! # File format
+//! The primitives are the circle, the half-plane, the box (axis-aligned or rotated) and the
+//! polygon (for large polygons and polygons with holes, [`super::region::AreaField`]); and, or
+//! and not apply the shape's [`RFamily`]. A shape file is JSON, and every error in it names the
+//! file and the JSON place:
 //!
 //! ```json
 //! { "rfunction": { "alpha": 0.0 },
@@ -23,11 +13,7 @@
 //!                       { "not": { "box": { "c": [4, 0], "size": [6, 3], "angle": 30 } } } ] } }
 //! ```
 //!
-//! `rfunction` is optional (`{"alpha": α}` with −1 < α ≤ 1, `{"zero": m}`, `{"p": p}` with p even,
-//! or `"min"` for α = 1; default α = 0). Nodes: `circle {c, r}`, `halfplane {p, n}` (`n` points
-//! inside), `box {min, max}` or `box {c, size, angle?}` (degrees), `polygon [[x, y], …]` (at least
-//! three points, either orientation), `and [..]`, `or [..]`, `not {..}`. Every error names the
-//! file, the JSON place (`shape.and[1].circle.r`) and what is wrong; nothing in a file can panic.
+//! The primitives' functions and the file format in full are in `docs/implicit.md`.
 
 // `!(x > y)` is meant: a NaN must fail every check
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

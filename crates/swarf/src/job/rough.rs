@@ -99,16 +99,32 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
     opts.validate()?;
     let t0 = Instant::now();
     progress(Stage::Plan, 0.0);
-    let Planned { mut toolpath, levels: zs, regions } =
-        plan(job, opts)?.ok_or_else(|| Error::job("strategy", "the strategy found nothing to cut"))?;
+    let planned = plan(job, opts)?.ok_or_else(|| Error::job("strategy", "the strategy found nothing to cut"))?;
     progress(Stage::Plan, 0.5);
+    rough_planned(job, opts, planned, t0, progress)
+}
+
+/// The second half of [`rough`]: posts a program [`plan`] made of `job` with `opts` and proves
+/// it; `started` is when the planning started (the report's `compute_s` counts from it). For a
+/// program looked at as planned (before its coordinates are rounded to the post's micrometre)
+/// and then written and proven as `rough` would.
+pub fn rough_planned(
+    job: &Job,
+    opts: &RoughOptions,
+    planned: Planned,
+    started: Instant,
+    progress: &mut dyn FnMut(Stage, f64),
+) -> Result<RoughResult> {
+    let Planned { mut toolpath, levels: zs, regions, proof } = planned;
     toolpath.quantize(post::COORD_STEP, post::CENTER_STEP);
-    let compute_s = t0.elapsed().as_secs_f64();
+    let compute_s = started.elapsed().as_secs_f64();
     log::info!("{}: {} planned in {compute_s:.2} s, {} moves", job.name, opts.strategy.name(), toolpath.moves.len());
     progress(Stage::Plan, 1.0);
     let about = About { name: &job.name, what: "", cutting: &job.cutting, floor: job.floor };
-    finish(toolpath, zs, &about, opts, compute_s, progress, |tp, progress| {
-        crate::sim::simulate(job, &regions, &opts.sim, tp, &mut |f| progress(Stage::Simulate, f))
+    finish(toolpath, zs, &about, opts, compute_s, progress, |tp, progress| match proof {
+        // (the strategy simulated this very program with these settings while planning it)
+        Some(p) => Ok(p),
+        None => crate::sim::simulate(job, &regions, &opts.sim, tp, &mut |f| progress(Stage::Simulate, f)),
     })
 }
 
@@ -176,12 +192,7 @@ pub(crate) fn finish(
         report::fill(&mut rep, &toolpath, &rp, &rest, c.rapid_rate);
         replay = Some(rp);
     } else {
-        let t = toolpath.totals(c.rapid_rate);
-        rep.cut_length_mm = t.cut_length_mm;
-        rep.rapid_length_mm = t.rapid_length_mm;
-        rep.time_min = t.time_min;
-        rep.entries = t.entries;
-        rep.plunges = t.plunges;
+        report::fill_program(&mut rep, &toolpath, c.rapid_rate);
     }
     Ok(RoughResult { toolpath, gcode, report: rep, replay })
 }
@@ -195,6 +206,11 @@ pub struct Planned {
     pub levels: Vec<f64>,
     /// The regions of the job it was planned on.
     pub regions: crate::model::Regions,
+    /// The simulation of the program as it will be written (quantised to the post's
+    /// micrometre), with the options' simulation settings, when the strategy made one while
+    /// planning (the spiral's search simulates its choice); [`rough`] then takes it as the
+    /// program's proof instead of simulating it again.
+    pub proof: Option<(Replay, crate::sim::Rest)>,
 }
 
 /// Plans the program of a 2.5D job (no posting, no simulation), or `None` when a strategy that
@@ -215,7 +231,7 @@ pub fn plan(job: &Job, opts: &RoughOptions) -> Result<Option<Planned>> {
     };
     let cx =
         Context { job, regions: &regions, geom: &geom, link: &opts.link, sim: &opts.sim, zs: &zs, finish: &finish };
-    let Some(toolpath) = opts.strategy.plan(&cx)? else { return Ok(None) };
+    let Some(program) = opts.strategy.plan(&cx)? else { return Ok(None) };
     log::debug!("planned in {:.3} s", t0.elapsed().as_secs_f64());
-    Ok(Some(Planned { toolpath, levels: zs, regions }))
+    Ok(Some(Planned { toolpath: program.toolpath, levels: zs, regions, proof: program.proof }))
 }

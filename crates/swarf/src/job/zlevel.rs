@@ -1,22 +1,12 @@
 //! Z-level roughing of a part given as a mesh (paper 3, El-Midany et al.: §2 hunting planes,
 //! §3 Algorithms 1–2).
 //!
-//! The stock is cut in slices from the top. Each level `z` is a 2.5D job: the material is the
-//! stock, the part to keep is the shadow of the mesh above the level ([`crate::geom::mesh::Shadows`],
-//! grown by the allowance), and any 2.5D strategy of swarf (adaptive, offset, zigzag) plans it.
-//! The offset strategy is paper 3's Algorithm 1 (repeated inward offsets of the part contours);
-//! its accessible area (Algorithm 2, the opening of the level's material by the tool disk) is
-//! the `reachable` region of the level's [`crate::model::Regions`].
-//!
-//! Levels are the step-downs from the stock top to the floor plus one at every flat of the
-//! part (the height of each upward facet, raised by the floor allowance), so that floors and
-//! the tops of islands are not left a step-down thick.
-//!
-//! One material model follows the whole job: each level is planned on the stock that the levels
-//! above left (through [`crate::sim::SimOptions::heights`]), so its links and entries see the
-//! material the levels above could not reach, and the program's replay for the report reads
-//! the part's surface from the mesh ([`crate::sim::heights::height_map`]), so a gouge anywhere on the
-//! surface is found.
+//! The stock is cut in slices from the top, at every step-down and at every flat of the part.
+//! Each level is a 2.5D job whose part is the shadow of the mesh above it
+//! ([`crate::geom::mesh::Shadows`], grown by the allowance), planned by any 2.5D strategy (the
+//! offset strategy is Algorithm 1, the level's `reachable` region Algorithm 2's accessible
+//! area) on the stock the levels above left; the report's replay reads the part's surface from
+//! the mesh, so a gouge anywhere on it is found. The walk-through is in `docs/zlevel.md`.
 
 use super::rough::{About, RoughOptions, RoughResult, Stage, finish};
 use crate::error::{Error, Result, Setting};

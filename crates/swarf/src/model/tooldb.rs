@@ -1,22 +1,12 @@
 //! A tool database and paper 3's cost model (El-Midany et al., §2 eqs. 1–4, §6 Table 1).
 //!
-//! The database is a JSON file: the machine (`cost_per_hour` $/h, `rapid_feed_mm_min`,
-//! `tool_change_min`) and the tools (`id`, `type`, `teeth`, `diameter`, `width_of_cut`,
-//! `depth_of_cut`, `feed_per_tooth`, `cutting_speed_m_min`, `price`, `life_min`), in the form of
-//! the benchmark suite's `tools_elmidany.json`.
-//!
-//! Feeds come from the cutting data: spindle speed `n = 1000·vc / (π·D)` (rpm) and feed
-//! `F = fz·z·n` (mm/min). The cost of machining with a sequence of tools is (eqs. 2–4)
-//!
-//! ```text
-//! C  = Mc + Tc
-//! Mc = Cmc/60 · ( Σ_i (l_mc/f_mc + l_air/f_air)_i + n·t_ch )
-//! Tc = Σ_i (l_mc/f_mc)_i · Ct_i / t_lf,i
-//! ```
-//!
-//! with `Cmc` the machine's cost per hour, `l_mc` and `l_air` each tool's cutting and rapid path
-//! lengths, `f_mc` its feed, `f_air` the rapid feed, `n` the number of tools, `t_ch` the tool
-//! change time, `Ct` the tool's price and `t_lf` its life.
+//! The database is a JSON file of the machine (cost per hour, rapid feed, tool change time) and
+//! the tools (teeth, diameter, width and depth of cut, feed per tooth, cutting speed, price,
+//! life), in the form of the benchmark suite's `tools_elmidany.json`; feeds come from the
+//! cutting data (`n = 1000·vc / (π·D)`, `F = fz·z·n`), and the cost of a sequence of tools is
+//! the machine's time (cutting, rapids and tool changes) at its hourly cost plus, for each
+//! tool, its cutting time's share of its price over its life (eqs. 2–4). The fields and the
+//! formulas are in `docs/zlevel.md`.
 
 use crate::error::{Error, Result};
 use serde_json::Value;

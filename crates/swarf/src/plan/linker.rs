@@ -1,29 +1,14 @@
-//! Linking: turns passes into a program — entries, links, retracts — while keeping a raster
-//! model of the material up to date so that every decision is made against what is really left.
-//!
-//! For each pass, in order:
-//! 1. If the tool is down at this level and the straight way to the pass start is free of the
-//!    part: through cleared space it stays down — a rapid at depth, as FreeCAD's Adaptive links
-//!    (`LiftDistance` 0), after a short feed move while the tool still touches the material it
-//!    just cut; with `feed_links`, a feed move (a rapid lifted by a hair when long) for
-//!    controls whose G0 is not straight. Through material only when the step is short (a
-//!    stepover), as a cut.
-//! 2. Otherwise the tool goes up just as far as it must — the *minimum retract*: the approach
-//!    height above the highest material along the way, the safe height only when even that is
-//!    not clear — over to the start, and down (the adaptive strategy first looks for a way at
-//!    depth round the material through cleared space, see [`route`], and takes it when it costs
-//!    less time than the lift):
-//!    - a rapid to just above the material and a descent at the cutting feed (the tool touches
-//!      nothing on the way down) when the tool lands in free space or cleared space (a lateral
-//!      entry from outside the stock);
-//!    - otherwise a **helix** around the start when one fits between the part walls, then one
-//!      full turn at depth (paper 1 §4.5: the distance-transform maximum is where a helix fits;
-//!      closed passes are started at their point farthest from the walls);
-//!    - otherwise a **ramp** zigzagging along the start of the pass;
-//!    - a **plunge** only when neither fits; plunges are counted and reported.
-//! 3. The pass itself, arc-fitted into lines and arcs, is cut into the model.
+//! Linking: turns passes into a program — entries, links, retracts — while keeping a model of
+//! the material up to date (through [`Material`]) so that every decision is made against what
+//! is really left. For each pass: a keep-down link at depth through cleared space when the tool
+//! is down (a short feed move while it leaves the material, then a rapid; a short step through
+//! material as a cut), else a lift to the minimum retract and an entry, the first that fits of a
+//! descent into free or cleared space, a lateral landing, a helix, a ramp and, noted, a plunge;
+//! then the pass, arc-fitted and cut into the model. The walk-through, with a figure, is in
+//! `docs/linking.md`.
 
 use super::LinkOptions;
+use super::material::Material;
 use super::pass::{LANDING_MARGIN, Pass, PassKind};
 use crate::error::Result;
 use crate::geom::arcfit::{self, Piece};
@@ -77,10 +62,12 @@ pub(crate) fn order(passes: &[Pass], from: DVec2) -> Vec<Pass> {
     out
 }
 
-pub(crate) struct Linker<'a> {
+/// Builds the program pass by pass on the material model `M` (the raster model by default).
+pub(crate) struct Linker<'a, M = RasterSim> {
     pub(crate) job: &'a Job,
     pub(crate) link: &'a LinkOptions,
-    pub(crate) sim: RasterSim,
+    /// The planning model of the material, kept up to date with every move pushed.
+    pub(crate) sim: M,
     pub(crate) tp: Toolpath,
     pub(crate) safe_z: f64,
     pub(crate) r: f64,
@@ -112,9 +99,16 @@ impl<'a> Linker<'a> {
     ) -> Result<Self> {
         let mut sim = RasterSim::new(job, regions, sim_opts)?;
         sim.track_exact = false;
+        Ok(Linker::with_model(job, link, sim, first))
+    }
+}
+
+impl<'a, M: Material> Linker<'a, M> {
+    /// A linker on the material model `sim`, the tool at the safe height above `first`.
+    pub(crate) fn with_model(job: &'a Job, link: &'a LinkOptions, sim: M, first: DVec2) -> Self {
         let safe_z = job.top() + link.clearance;
         let tp = Toolpath::new(job.cutting.tool.clone(), DVec3::new(first.x, first.y, safe_z), safe_z);
-        Ok(Linker {
+        Linker {
             job,
             link,
             sim,
@@ -128,7 +122,7 @@ impl<'a> Linker<'a> {
             step: job.stepover_mm(),
             precut: false,
             clear_margin: 0.0,
-        })
+        }
     }
 
     /// Cuts the finishing contours of each level (`finish[i] = (z, passes)`), after the roughing.
@@ -269,7 +263,7 @@ impl<'a> Linker<'a> {
     pub(crate) fn link_around(&mut self, to: DVec2, z: f64) -> bool {
         let cur = self.tp.end();
         let a = cur.truncate();
-        let h = (0.5 * self.r).max(4.0 * self.sim.grid.res);
+        let h = (0.5 * self.r).max(4.0 * self.sim.grid().res);
         let reach = self.r + self.clear_margin + 0.75 * h;
         let budget = self.lift_cost(to, z);
         let margin = self.clear_margin;
@@ -279,7 +273,7 @@ impl<'a> Linker<'a> {
             h,
             budget,
             20_000,
-            |p| self.sim.grid.cell_of(p).is_some() && self.top_near(p, reach) <= z + 0.01 && self.keep_safe(p, p, z),
+            |p| self.sim.grid().cell_of(p).is_some() && self.top_near(p, reach) <= z + 0.01 && self.keep_safe(p, p, z),
             |p| self.keep_safe(a, p, z) && self.sim.leaving_distance(cur, p.extend(z), margin).is_some(),
             |p, q| self.keep_safe(p, q, z) && self.sim.is_clear(&Path::Line { a: p.extend(z), b: q.extend(z) }, margin),
         );
@@ -696,4 +690,255 @@ fn prefix_of(pts: &[DVec2], len: f64) -> Vec<DVec2> {
         out.push(w[1]);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::Area;
+    use crate::toolpath::{Motion, Move};
+
+    /// A `w`×`h` mm pocket 2 mm deep, its walls a frame of part round the stock, a Ø4 mm tool,
+    /// planned on 0.05 mm cells.
+    struct Pocket {
+        job: Job,
+        regions: Regions,
+        link: LinkOptions,
+        sim: SimOptions,
+    }
+
+    impl Pocket {
+        fn new(w: f64, h: f64) -> Pocket {
+            let part = Area::rect(-5.0, -5.0, w + 5.0, h + 5.0).difference(&Area::rect(0.0, 0.0, w, h));
+            let job = Job::new("pocket", Area::rect(0.0, 0.0, w, h), part, 4.0, 2.0);
+            let link = LinkOptions::DEFAULT;
+            let regions = job.regions(job.radius(), link.arc_tol + 0.001).expect("the pocket's regions");
+            Pocket { job, regions, link, sim: SimOptions { res: Some(0.05), ..SimOptions::DEFAULT } }
+        }
+
+        /// The level (the floor).
+        fn z(&self) -> f64 {
+            self.job.levels()[0]
+        }
+
+        /// A linker on a fresh model of the pocket, the tool up above `first`.
+        fn linker(&self, first: DVec2) -> Linker<'_> {
+            Linker::new(&self.job, &self.regions, &self.link, &self.sim, first).expect("the pocket's model")
+        }
+    }
+
+    /// Clears the model at `z` along the horizontal line at `y` from `x0` to `x1` (everything
+    /// within the tool radius of it).
+    fn clear_row(l: &mut Linker, z: f64, y: f64, x0: f64, x1: f64) {
+        l.sim.cut(&Path::Line { a: DVec2::new(x0, y).extend(z), b: DVec2::new(x1, y).extend(z) });
+    }
+
+    /// Puts the tool down at `p` at `z` (in space already cut) without cutting the model.
+    fn stand_at(l: &mut Linker, p: DVec2, z: f64) {
+        l.precut = true;
+        l.push_line(MoveKind::Rapid, p.extend(l.safe_z), 0.0);
+        l.push_line(MoveKind::Descend, p.extend(z), l.feed);
+        l.precut = false;
+        l.down_at = Some(z);
+    }
+
+    fn count(moves: &[Move], kind: MoveKind) -> usize {
+        moves.iter().filter(|m| m.kind == kind).count()
+    }
+
+    fn noted(l: &Linker, start: &str) -> bool {
+        l.tp.notes.iter().any(|n| n.text.starts_with(start))
+    }
+
+    /// The pocket full of stock, the start in its middle, 5 mm from the walls: no landing
+    /// beside the material within reach, room for a helix of 0.75 R. The tool goes down by a
+    /// helix round the start (arcs at the ramp feed, ending at depth), one turn at depth, and is
+    /// at the start.
+    #[test]
+    fn the_entry_is_a_helix_where_one_fits() {
+        let p = Pocket::new(20.0, 10.0);
+        let z = p.z();
+        let start = DVec2::new(10.0, 5.0);
+        let mut l = p.linker(start);
+        l.enter(start, &[start, DVec2::new(15.0, 5.0)], z, 0.01);
+        let entry: Vec<&Move> = l.tp.moves.iter().filter(|m| m.kind == MoveKind::Entry).collect();
+        assert!(!entry.is_empty() && noted(&l, "helix entry r 1.500"), "{:?}", l.tp.notes);
+        for m in &entry {
+            assert!(matches!(m.motion, Motion::Arc { center, .. } if (center - start).length() < 1e-9), "{m:?}");
+            assert!(((m.to.truncate() - start).length() - 1.5).abs() < 1e-9 && m.feed == l.ramp_feed, "{m:?}");
+        }
+        assert_eq!(entry.last().map(|m| m.to.z), Some(z));
+        assert_eq!(l.tp.end(), start.extend(z));
+        assert_eq!(count(&l.tp.moves, MoveKind::Plunge) + count(&l.tp.moves, MoveKind::Descend), 0);
+    }
+
+    /// A slot 4.3 mm wide for the Ø4 mm tool: 0.15 mm on either side, less than the smallest
+    /// helix (0.1 R) needs. The tool ramps down along the start of the pass (straight lines
+    /// back and forth along it at the ramp angle), then is at the start at depth.
+    #[test]
+    fn the_entry_is_a_ramp_where_no_helix_fits() {
+        let p = Pocket::new(30.0, 4.3);
+        let z = p.z();
+        let start = DVec2::new(10.0, 2.15);
+        let mut l = p.linker(start);
+        let pass = [start, DVec2::new(25.0, 2.15)];
+        l.enter(start, &pass, z, 0.01);
+        let entry: Vec<&Move> = l.tp.moves.iter().filter(|m| m.kind == MoveKind::Entry).collect();
+        assert!(entry.len() >= 2 && noted(&l, "ramp entry along 12.000 mm"), "{:?}", l.tp.notes);
+        let mut prev_z = f64::INFINITY;
+        for m in &entry {
+            assert!(matches!(m.motion, Motion::Line) && m.feed == l.ramp_feed, "{m:?}");
+            // along the pass, never deeper than the level, always down or level
+            assert!((m.to.y - 2.15).abs() < 1e-9 && (10.0..=22.0 + 1e-9).contains(&m.to.x), "{m:?}");
+            assert!(m.to.z <= prev_z + 1e-12 && m.to.z >= z, "{m:?}");
+            prev_z = m.to.z;
+        }
+        assert_eq!(prev_z, z);
+        assert_eq!(l.tp.end(), start.extend(z));
+        assert!(!noted(&l, "helix") && count(&l.tp.moves, MoveKind::Plunge) == 0);
+    }
+
+    /// The pocket with a hole already cleared 2.5 mm from the start: the tool lands in it
+    /// (descending at the feed through cleared space) and comes in sideways, although a helix
+    /// would fit at the start; and where the start itself is in cleared space, it just
+    /// descends there.
+    #[test]
+    fn a_lateral_landing_from_cleared_space_comes_before_a_helix() {
+        let p = Pocket::new(20.0, 10.0);
+        let z = p.z();
+        let start = DVec2::new(8.5, 5.0);
+        let mut l = p.linker(start);
+        for y in [4.5, 5.5] {
+            clear_row(&mut l, z, y, 2.0, 6.0);
+        }
+        l.enter(start, &[start, DVec2::new(15.0, 5.0)], z, 0.01);
+        assert!(noted(&l, "lateral entry") && !noted(&l, "helix"), "{:?}", l.tp.notes);
+        assert_eq!(count(&l.tp.moves, MoveKind::Entry) + count(&l.tp.moves, MoveKind::Plunge), 0);
+        let n = l.tp.moves.len();
+        let (land, side) = (l.tp.moves[n - 2], l.tp.moves[n - 1]);
+        assert!(land.kind == MoveKind::Descend && land.to.z == z && land.feed == l.feed, "{land:?}");
+        let d = (land.to.truncate() - start).length();
+        assert!(d > 0.0 && d <= 1.5 * l.r + 1e-9, "landed {d} mm away");
+        assert!(l.top_near(land.to.truncate(), l.r + LANDING_MARGIN) <= z + 0.01);
+        assert!(side.kind == MoveKind::Cut && side.to == start.extend(z), "{side:?}");
+        // from cleared space: straight down
+        let at = DVec2::new(4.0, 5.0);
+        let before = l.tp.moves.len();
+        l.down_at = None;
+        l.enter(at, &[at, DVec2::new(4.0, 6.0)], z, 0.01);
+        let down = &l.tp.moves[before..];
+        assert!(down.iter().all(|m| m.is_rapid() || m.kind == MoveKind::Descend), "{down:?}");
+        assert_eq!(down.last().map(|m| (m.kind, m.to)), Some((MoveKind::Descend, at.extend(z))));
+    }
+
+    /// A pocket just wider than the tool each way and a pass too short to ramp along: no
+    /// helix, no ramp, no landing beside it. Only then a plunge, at the entry feed, with a note
+    /// in the program.
+    #[test]
+    fn a_plunge_only_when_nothing_fits_and_it_is_noted() {
+        let p = Pocket::new(4.3, 4.3);
+        let z = p.z();
+        let start = DVec2::new(2.15, 2.15);
+        let mut l = p.linker(start);
+        l.enter(start, &[start, DVec2::new(2.2, 2.15)], z, 0.01);
+        assert!(noted(&l, "plunge: no room for a helix or a ramp"), "{:?}", l.tp.notes);
+        let last = l.tp.moves.last().copied().expect("moves");
+        assert_eq!((last.kind, last.to, last.feed), (MoveKind::Plunge, start.extend(z), l.entry_feed));
+        assert_eq!(count(&l.tp.moves, MoveKind::Entry) + count(&l.tp.moves, MoveKind::Descend), 0);
+    }
+
+    /// The pocket cleared below y = 7; the tool down at y = 5.3, its edge 0.3 mm into the
+    /// material above. To the next pass, 2.8 mm straight down through cleared space, it stays
+    /// down: fed (at the boosted feed) for the little way it still touches the material, then
+    /// a rapid at depth.
+    #[test]
+    fn through_cleared_space_the_link_stays_down() {
+        let p = Pocket::new(20.0, 10.0);
+        let z = p.z();
+        let (a, b) = (DVec2::new(10.0, 5.3), DVec2::new(10.0, 2.5));
+        let mut l = p.linker(a);
+        for y in [-1.0, 1.0, 3.0, 5.0] {
+            clear_row(&mut l, z, y, -3.0, 23.0);
+        }
+        stand_at(&mut l, a, z);
+        let before = l.tp.moves.len();
+        l.pass(
+            Pass {
+                pts: vec![b, DVec2::new(14.0, 2.5)],
+                closed: false,
+                kind: PassKind::Clear,
+                level: 0.0,
+                reversible: false,
+            },
+            z,
+        );
+        let link = &l.tp.moves[before..before + 2];
+        assert_eq!(link[0].kind, MoveKind::Link, "{link:?}");
+        assert_eq!(link[0].feed, l.feed * l.link.feed_boost);
+        let fed = (link[0].to.truncate() - a).length();
+        assert!(fed > 0.2 && fed < 0.35, "fed for {fed} mm");
+        assert_eq!((link[1].kind, link[1].to), (MoveKind::Rapid, b.extend(z)));
+        assert!(l.tp.moves[before..].iter().all(|m| m.to.z == z), "the tool left the level");
+    }
+
+    /// The pocket cleared but for a wall of material across it (8 < x < 12): from one side to
+    /// the other the tool cannot stay down. It lifts just over the material — the approach
+    /// height above the stock top, not the safe height — crosses, comes down by rapids to the
+    /// approach height above the level and descends at the feed.
+    #[test]
+    fn material_in_the_way_lifts_the_tool_no_higher_than_it_must() {
+        let p = Pocket::new(20.0, 10.0);
+        let z = p.z();
+        let (a, b) = (DVec2::new(4.0, 5.0), DVec2::new(16.0, 5.0));
+        let mut l = p.linker(a);
+        for y in [1.0, 3.0, 5.0, 7.0, 9.0] {
+            clear_row(&mut l, z, y, -3.0, 6.0);
+            clear_row(&mut l, z, y, 14.0, 23.0);
+        }
+        stand_at(&mut l, a, z);
+        let before = l.tp.moves.len();
+        l.pass(
+            Pass {
+                pts: vec![b, DVec2::new(16.0, 8.0)],
+                closed: false,
+                kind: PassKind::Clear,
+                level: 0.0,
+                reversible: false,
+            },
+            z,
+        );
+        let moves = &l.tp.moves[before..];
+        let k = moves.iter().position(|m| m.kind == MoveKind::Descend).expect("a descent");
+        let top = moves[..k].iter().map(|m| m.to.z).fold(f64::NEG_INFINITY, f64::max);
+        assert_eq!(top, p.job.top() + l.link.approach);
+        assert!(top < l.safe_z);
+        assert!(moves[..k].iter().all(|m| m.is_rapid()), "{:?}", &moves[..k]);
+        assert_eq!(moves[k - 1].to, b.extend(z + l.link.approach));
+        assert_eq!((moves[k].to, moves[k].feed), (b.extend(z), l.feed));
+    }
+
+    /// After the last pass the tool goes straight up to the safe height, and the program says
+    /// so.
+    #[test]
+    fn the_program_ends_with_a_retract_to_the_safe_height() {
+        let p = Pocket::new(20.0, 10.0);
+        let z = p.z();
+        let a = DVec2::new(4.0, 5.0);
+        let mut l = p.linker(a);
+        l.pass(
+            Pass {
+                pts: vec![a, DVec2::new(16.0, 5.0)],
+                closed: false,
+                kind: PassKind::Clear,
+                level: 0.0,
+                reversible: false,
+            },
+            z,
+        );
+        let (end, safe) = (l.tp.end(), l.safe_z);
+        let tp = l.finish();
+        let last = tp.moves.last().copied().expect("moves");
+        assert_eq!((last.kind, last.to), (MoveKind::Rapid, DVec3::new(end.x, end.y, safe)));
+        assert_eq!(tp.notes.last().map(|n| (n.at, n.text.as_str())), Some((tp.moves.len() - 1, "end: retract")));
+    }
 }

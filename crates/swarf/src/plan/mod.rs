@@ -3,6 +3,8 @@
 //!
 //! - `linker`: entries, keep-down links, lifts and retracts, decided against a raster model of
 //!   the material kept up to date as the program is built;
+//! - `material`: the material model as the planner sees it (the queries and updates the
+//!   linker and the adaptive engine make of it), implemented by the raster model;
 //! - `levels`: the level driver (one linker for the whole program, the levels top down, the
 //!   finishing contours);
 //! - `route`: ways at depth round the material through cleared space;
@@ -11,6 +13,7 @@
 
 pub(crate) mod levels;
 pub(crate) mod linker;
+pub(crate) mod material;
 mod options;
 #[doc(hidden)]
 pub mod pass;
@@ -18,6 +21,7 @@ pub mod pass;
 pub mod route;
 
 pub(crate) use linker::Linker;
+pub(crate) use material::Material;
 pub use options::LinkOptions;
 #[doc(hidden)]
 pub use pass::{DP_TOL, LANDING_MARGIN, LayerGeom, Pass, PassKind, TOUCH_MARGIN};

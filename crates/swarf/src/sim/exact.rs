@@ -14,8 +14,7 @@
 //! counted as clearing down to its highest point — slightly conservative on the way down.
 
 use super::sweep::{Fast, Path};
-use crate::geom::{DVec2, wrap_pi};
-use std::f64::consts::{FRAC_PI_2, PI};
+use crate::geom::DVec2;
 
 /// One swept primitive at constant z (the level it clears down to).
 #[derive(Debug, Clone, Copy)]
@@ -149,25 +148,21 @@ impl ExactModel {
         if z + eps >= self.stock_top || dir.length_squared() < 1e-24 {
             return 0.0;
         }
-        let base = dir.y.atan2(dir.x);
-        let u = dir.normalize();
+        let ring = Ring { c, rho, u: dir.normalize() };
         // 1. front half inside the stock
         self.angles.clear();
-        self.angles.push(-FRAC_PI_2);
-        self.angles.push(FRAC_PI_2);
+        self.angles.push(-1.0);
+        self.angles.push(1.0);
         let m = DVec2::splat(rho);
         let angles = &mut self.angles;
-        self.stock_edges.for_each_near(c - m, c + m, |_, a, b| ring_segment_crossings(c, rho, a, b, base, angles));
-        self.angles.retain(|a| (-FRAC_PI_2..=FRAC_PI_2).contains(a));
+        self.stock_edges.for_each_near(c - m, c + m, |_, a, b| ring.segment_crossings(a, b, angles));
         self.angles.sort_by(f64::total_cmp);
         let mut base_iv: Vec<(f64, f64)> = Vec::new();
         for w in self.angles.windows(2) {
             if w[1] - w[0] < 1e-12 {
                 continue;
             }
-            let mid = 0.5 * (w[0] + w[1]);
-            let q = c + rho * DVec2::new((base + mid).cos(), (base + mid).sin());
-            if self.in_stock(q) {
+            if self.in_stock(ring.point(0.5 * (w[0] + w[1]))) {
                 push_merge(&mut base_iv, (w[0], w[1]));
             }
         }
@@ -199,20 +194,21 @@ impl ExactModel {
                         // wholly behind the front half, or beyond the ring
                         let (hc, hr) = p.hull;
                         let v = hc - c;
-                        if v.dot(u) + hr < 0.0 || v.length() - hr > rho {
+                        if v.dot(ring.u) + hr < 0.0 || v.length() - hr > rho {
                             continue;
                         }
-                        covered_intervals(&p.path, &p.fast, rr, c, rho, base, &mut self.angles, &mut self.covered);
+                        covered_intervals(&p.path, &p.fast, rr, &ring, &mut self.angles, &mut self.covered);
                     }
                 }
             }
         }
         if let Some(cur) = current {
-            covered_intervals(cur, &Fast::new(cur), rr, c, rho, base, &mut self.angles, &mut self.covered);
+            covered_intervals(cur, &Fast::new(cur), rr, &ring, &mut self.angles, &mut self.covered);
         }
-        // 3. measure base minus covered
+        // 3. measure base minus covered (the angle of a key t is 2 atan t)
         self.covered.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut total = 0.0;
+        let mut open = |a: f64, b: f64| total += 2.0 * (b.atan() - a.atan());
         for &(a, b) in &base_iv {
             let mut cur = a;
             for &(ca, cb) in &self.covered {
@@ -223,7 +219,7 @@ impl ExactModel {
                     break;
                 }
                 if ca > cur {
-                    total += ca - cur;
+                    open(cur, ca);
                 }
                 cur = cur.max(cb);
                 if cur >= b {
@@ -231,7 +227,7 @@ impl ExactModel {
                 }
             }
             if cur < b {
-                total += b - cur;
+                open(cur, b);
             }
         }
         total.to_degrees()
@@ -274,110 +270,131 @@ fn push_merge(v: &mut Vec<(f64, f64)>, iv: (f64, f64)) {
     v.push(iv);
 }
 
-/// Angles (relative to `base`) where the ring (centre `c`, radius `rho`) meets the circle of
-/// centre `o`, radius `s`.
-#[inline]
-fn ring_circle(c: DVec2, rho: f64, o: DVec2, s: f64, base: f64, out: &mut Vec<f64>) {
-    let v = o - c;
-    let d = v.length();
-    if d < 1e-12 || s <= 0.0 {
-        return;
-    }
-    let k = (rho * rho + d * d - s * s) / (2.0 * rho * d);
-    if k.abs() > 1.0 {
-        return;
-    }
-    let phi = v.y.atan2(v.x) - base;
-    let a = k.acos();
-    out.push(wrap_pi(phi + a));
-    out.push(wrap_pi(phi - a));
+/// The ring of one query: centre `c`, radius `rho`, and the unit direction of motion `u`.
+///
+/// A point of the ring is named by its angle θ from `u` (positive to the left), written as the
+/// key `t = tan(θ/2)`, which grows with θ: the front half (|θ| ≤ 90°) is `t` in [-1, 1]. The
+/// crossings, their order and the test of each piece at its middle are then plain algebra
+/// (the unit vector of the crossing and the rational parametrisation of the circle); only the
+/// uncovered pieces that are measured take an arctangent. A trigonometric version spent about
+/// half of a simulation in `sin`, `cos`, `atan2` and `acos`.
+struct Ring {
+    c: DVec2,
+    rho: f64,
+    u: DVec2,
 }
 
-/// Angles where the ring meets the infinite line `n · x = h` (`n` unit).
-#[inline]
-fn ring_line(c: DVec2, rho: f64, n: DVec2, h: f64, base: f64, out: &mut Vec<f64>) {
-    let k = (h - n.dot(c)) / rho;
-    if k.abs() > 1.0 {
-        return;
+impl Ring {
+    /// The point of the ring at key `t`.
+    #[inline]
+    fn point(&self, t: f64) -> DVec2 {
+        let d = 1.0 / (1.0 + t * t);
+        let (x, y) = ((1.0 - t * t) * d, 2.0 * t * d);
+        self.c + self.rho * (self.u * x + self.u.perp() * y)
     }
-    let psi = n.y.atan2(n.x) - base;
-    let a = k.acos();
-    out.push(wrap_pi(psi + a));
-    out.push(wrap_pi(psi - a));
-}
 
-/// Angles where the ring meets segment `a`–`b`.
-fn ring_segment_crossings(c: DVec2, rho: f64, a: DVec2, b: DVec2, base: f64, out: &mut Vec<f64>) {
-    let d = b - a;
-    let l = d.length();
-    if l < 1e-15 {
-        return;
+    /// Pushes the keys of the front-half points whose direction from the centre makes an angle
+    /// with the unit vector `w` of cosine `k` (on either side).
+    #[inline]
+    fn at_cosine(&self, w: DVec2, k: f64, out: &mut Vec<f64>) {
+        if k.abs() > 1.0 {
+            return;
+        }
+        let s = (1.0 - k * k).sqrt();
+        // w in the ring's frame (x along u)
+        let (wx, wy) = (w.dot(self.u), self.u.perp_dot(w));
+        for (x, y) in [(wx * k - wy * s, wy * k + wx * s), (wx * k + wy * s, wy * k - wx * s)] {
+            if x >= 0.0 {
+                out.push((y / (1.0 + x)).clamp(-1.0, 1.0));
+            }
+        }
     }
-    let n = DVec2::new(-d.y, d.x) / l;
-    let h = n.dot(a);
-    let start = out.len();
-    ring_line(c, rho, n, h, base, out);
-    // keep only crossings within the segment
-    let mut i = start;
-    while i < out.len() {
-        let ang = out[i] + base;
-        let q = c + rho * DVec2::new(ang.cos(), ang.sin());
-        let t = (q - a).dot(d) / (l * l);
-        if (-1e-12..=1.0 + 1e-12).contains(&t) {
-            i += 1;
-        } else {
-            out.swap_remove(i);
+
+    /// Keys where the ring meets the circle of centre `o`, radius `s` (front half only).
+    #[inline]
+    fn circle(&self, o: DVec2, s: f64, out: &mut Vec<f64>) {
+        let v = o - self.c;
+        let d = v.length();
+        if d < 1e-12 || s <= 0.0 {
+            return;
+        }
+        self.at_cosine(v / d, (self.rho * self.rho + d * d - s * s) / (2.0 * self.rho * d), out);
+    }
+
+    /// Keys where the ring meets the infinite line `n · x = h` (`n` unit).
+    #[inline]
+    fn line(&self, n: DVec2, h: f64, out: &mut Vec<f64>) {
+        self.at_cosine(n, (h - n.dot(self.c)) / self.rho, out);
+    }
+
+    /// Keys where the ring meets segment `a`–`b`.
+    fn segment_crossings(&self, a: DVec2, b: DVec2, out: &mut Vec<f64>) {
+        let d = b - a;
+        let l = d.length();
+        if l < 1e-15 {
+            return;
+        }
+        let n = DVec2::new(-d.y, d.x) / l;
+        let start = out.len();
+        self.line(n, n.dot(a), out);
+        // keep only crossings within the segment
+        let mut i = start;
+        while i < out.len() {
+            let t = (self.point(out[i]) - a).dot(d) / (l * l);
+            if (-1e-12..=1.0 + 1e-12).contains(&t) {
+                i += 1;
+            } else {
+                out.swap_remove(i);
+            }
         }
     }
 }
 
-/// Appends to `covered` the front-half angular intervals of the ring inside the sweep of `path`
+/// Appends to `covered` the front-half key intervals of the ring inside the sweep of `path`
 /// with tool radius `r`.
-#[allow(clippy::too_many_arguments)]
 fn covered_intervals(
     path: &Path,
     fast: &Fast,
     r: f64,
-    c: DVec2,
-    rho: f64,
-    base: f64,
+    ring: &Ring,
     scratch: &mut Vec<f64>,
     covered: &mut Vec<(f64, f64)>,
 ) {
+    let (c, rho) = (ring.c, ring.rho);
     // quick reject: the ring cannot meet the sweep
     let d = fast.distance(c);
     if d > rho + r {
         return;
     }
     if d + rho <= r {
-        covered.push((-FRAC_PI_2, FRAC_PI_2));
+        covered.push((-1.0, 1.0));
         return;
     }
     scratch.clear();
-    scratch.push(-FRAC_PI_2);
-    scratch.push(FRAC_PI_2);
+    scratch.push(-1.0);
+    scratch.push(1.0);
     match *path {
         Path::Line { a, b } => {
             let (a, b) = (a.truncate(), b.truncate());
-            ring_circle(c, rho, a, r, base, scratch);
-            ring_circle(c, rho, b, r, base, scratch);
+            ring.circle(a, r, scratch);
+            ring.circle(b, r, scratch);
             let dv = b - a;
             let l = dv.length();
             if l > 1e-12 {
                 let n = DVec2::new(-dv.y, dv.x) / l;
                 let h = n.dot(a);
-                ring_line(c, rho, n, h + r, base, scratch);
-                ring_line(c, rho, n, h - r, base, scratch);
+                ring.line(n, h + r, scratch);
+                ring.line(n, h - r, scratch);
             }
         }
         Path::Arc(g) => {
             let p0 = g.at(0.0).truncate();
             let p1 = g.at(1.0).truncate();
-            ring_circle(c, rho, p0, r, base, scratch);
-            ring_circle(c, rho, p1, r, base, scratch);
-            ring_circle(c, rho, g.center, g.radius + r, base, scratch);
+            ring.circle(p0, r, scratch);
+            ring.circle(p1, r, scratch);
+            ring.circle(g.center, g.radius + r, scratch);
             if g.radius > r {
-                ring_circle(c, rho, g.center, g.radius - r, base, scratch);
+                ring.circle(g.center, g.radius - r, scratch);
             }
             // where the ring crosses the radial lines through the arc ends
             for p in [p0, p1] {
@@ -385,12 +402,11 @@ fn covered_intervals(
                 let l = dv.length();
                 if l > 1e-12 {
                     let n = DVec2::new(-dv.y, dv.x) / l;
-                    ring_line(c, rho, n, n.dot(g.center), base, scratch);
+                    ring.line(n, n.dot(g.center), scratch);
                 }
             }
         }
     }
-    scratch.retain(|a| (-FRAC_PI_2..=FRAC_PI_2).contains(a));
     scratch.sort_by(f64::total_cmp);
     let start = covered.len();
     for i in 0..scratch.len().saturating_sub(1) {
@@ -398,9 +414,7 @@ fn covered_intervals(
         if a1 - a0 < 1e-13 {
             continue;
         }
-        let mid = 0.5 * (a0 + a1);
-        let q = c + rho * DVec2::new((base + mid).cos(), (base + mid).sin());
-        if fast.distance(q) <= r {
+        if fast.distance(ring.point(0.5 * (a0 + a1))) <= r {
             if covered.len() > start
                 && let Some(last) = covered.last_mut()
                 && (a0 - last.1).abs() < 1e-12
@@ -411,7 +425,6 @@ fn covered_intervals(
             covered.push((a0, a1));
         }
     }
-    let _ = PI;
 }
 
 #[cfg(test)]

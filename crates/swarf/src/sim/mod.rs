@@ -1,24 +1,14 @@
 //! Material simulation on a raster (paper 1 §4, §4.2): part, stock, fixture and free space in
 //! cells of a size the user sets, cut by replaying lines, arcs and helices with a flat end mill.
 //!
-//! The simulator measures what the report and the benchmarks need:
-//! - **engagement**, two ways: paper 1 eq. 4 (the share of the discretised tool's circumference
-//!   pixels that lie in material, [`raster::RasterSim::engagement_pixel`]) and exactly (the arc
-//!   of the tool circle inside uncut material from the cleared geometry,
-//!   [`exact::ExactModel`]); both count only the half of the tool ahead of the motion;
-//! - **gouges** (the tool within `R − tol` of the part, a fixture or below the floor), checked on
-//!   the grid and exactly against the part polygons;
-//! - **rapid collisions** (a G0 touching uncut material), **plunges**, removed volume and
-//!   **rest material** (reachable material left standing).
-//!
-//! A second engine, [`sdf::SdfSim`], replays programs on sampled signed distance fields
-//! (paper 4 §4) with the same measures; [`SimOptions::engine`] picks the one [`simulate`] uses
-//! for the report. Both walk the program through the same replay (the `replay` module).
-//!
-//! Each cell holds the stock top height, so the same engine serves every level of a 2.5D job
-//! (material stands where the height is above the tool tip). Moves are cut analytically: for
-//! every cell, the interval of the move during which the axis is within `R` of the cell centre
-//! ([`sweep`]) gives the lowest tip height over it.
+//! The simulator measures what the report and the benchmarks need: **engagement** two ways
+//! (paper 1 eq. 4, the share of the tool's circumference pixels in material, and exactly, from
+//! the cleared geometry), **gouges**, **rapid collisions**, **plunges**, the removed volume and
+//! the **rest material**. Each cell holds the stock top height, so one model serves every level
+//! of a 2.5D job, and moves are cut analytically. A second engine replays programs on sampled
+//! signed distance fields (paper 4 §4, eqs. 9–12) with the same measures through the same
+//! replay; [`SimOptions::engine`] picks the one [`simulate`] uses for the report. The
+//! walk-through of both engines is in `docs/simulation.md`.
 
 #[doc(hidden)]
 pub mod edt;
@@ -50,11 +40,11 @@ use crate::toolpath::Toolpath;
 /// Which material model replays a program for the report.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum SimEngine {
-    /// Heights on a raster of cells ([`RasterSim`]), exact engagement from the cleared
+    /// Heights on a raster of cells (`RasterSim`), exact engagement from the cleared
     /// geometry.
     #[default]
     Raster,
-    /// Sampled signed distance fields per slab ([`SdfSim`], paper 4 §4), engagement by root
+    /// Sampled signed distance fields per slab (`SdfSim`, paper 4 §4), engagement by root
     /// finding on the field.
     Sdf,
 }
@@ -128,7 +118,7 @@ pub struct SimOptions {
     /// state a 3D job's earlier levels and tools left, and the part's surface (see
     /// [`HeightMap`]).
     pub heights: Option<std::sync::Arc<HeightMap>>,
-    /// Keep the surely cut heights too (see [`raster::RasterSim::is_clear`]) and check links and
+    /// Keep the surely cut heights too (see `raster::RasterSim::is_clear`) and check links and
     /// rapids against them: a speck narrower than a cell between sweeps then never meets a
     /// rapid. On for the levels of z-level roughing, whose long rapids at depth cross large
     /// cleared areas; it makes cutting in the model about a tenth slower.

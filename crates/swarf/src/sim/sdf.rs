@@ -2,61 +2,13 @@
 //! workpiece as a signed Euclidean distance field, eq. 9, cut by the distance field of the
 //! tool's swept volume, eq. 10–12), a second engine beside the raster of [`super::raster`].
 //!
-//! # The field
-//!
-//! A 2.5D job's material is a stack of planar cross-sections. The program's own heights cut it
-//! into **slabs**: the stock top, every height at which the program cuts flat, and its lowest
-//! point bound them, and inside a slab the material of a program that cuts flat only at those
-//! heights does not change with z. Each slab keeps the cross-section just above its bottom
-//! (at `bottom + min(eps, thickness / 2)`) as a signed distance `d(q)`, positive in material
-//! (paper 4 eq. 9), so that a tool whose tip stands at the slab's bottom meets exactly that
-//! section. A ramp or a helix cuts each slab with the part of it whose tip is below the
-//! section's height (its parameter interval there is found from the linear z).
-//!
-//! The distance is **sampled** on a square lattice of spacing `h` and read between samples
-//! by bilinear interpolation. Only a band `|d| ≤ 2h` round the boundary matters (the zero set
-//! and the interpolation of every cell it crosses), so `d` is truncated to `±2h` and stored
-//! sparsely, in the spirit of the adaptively sampled distance fields of Frisken et al. (2000):
-//! a tile of 16 × 16 samples is either *inside* (all `+2h`), *outside* (all `−2h`) — one
-//! word, no samples — or *dense* (256 `f32`). Tiles become dense when the boundary enters them
-//! and are freed again once a cut leaves them wholly outside. The memory therefore follows the
-//! length of the material's boundary (stock outline, walls, the front being cut), not the
-//! area of the stock, which is what lets the field sample several times finer than the raster
-//! at the same memory (see the `sim` benchmark). Two levels are enough for 2.5D pockets; a
-//! full quadtree with biquadratic cells would only save more of the same.
-//!
-//! # Cutting
-//!
-//! A flat end mill of radius `R` moving along a line, an arc or a helix sweeps, in every
-//! section below its tip, the Minkowski sum of the axis path and the tool disk (paper 4 §4,
-//! `S = P ⊕ T`). Its signed distance (positive inside the sweep) is `R − dist(q, P)`: the
-//! inverted-trajectory distance of paper 4 eq. 12 reduces, for a 3-axis flat tool in a
-//! section, to the distance from `q` to the axis path, which is closed form for a segment or
-//! an arc ([`super::sweep::Fast`]), no numerical search needed. The cut is the CSG difference
-//! `d ← min(d, dist(q, P) − R)` (material ∖ sweep, with positive-inside fields), applied to
-//! the samples of the tiles within `R + 2h` of the path. `min` of two distance fields is a
-//! distance bound, not always the exact distance, but its zero set is exact, and its values
-//! near the zero set are what interpolation reads.
-//!
-//! # Measures
-//!
-//! - **Engagement**: swarf's definition (see [`super::exact`]): the angle of the front half of
-//!   the circle of radius `R + ring_delta` round the tool that lies in material standing more
-//!   than `eps` above the tip, with the current move's own cut so far not material. Along the
-//!   circle, `g(θ) = min(d(q(θ)), dist(q(θ), current) − R)` is evaluated at steps of `h / 2`
-//!   of arc, and every sign change is refined by bisection to 10⁻⁹ rad: the angle inside
-//!   material is the measure of `{θ : g(θ) > 0}` — root finding on the field, not counting
-//!   samples. Features thinner than half a sample step can be missed, as any sampled field
-//!   misses them.
-//! - **Removed volume**: per slab, the initial minus the current cross-section area times the
-//!   slab's thickness; the areas are those where the bilinear field is positive (exact along
-//!   eight rows per cell).
-//! - **Gouges**: the tip below the floor by more than `tol`, or the tool within `R − tol` of
-//!   the part and fixtures (the distance from the path to their outline, exact).
-//! - **Rapid collisions** and **plunges**: samples in material within `R − tol` of the rapid's
-//!   path or of the plunging tool.
-//! - **Rest material**: the reachable samples where material stands more than `tol` above the
-//!   floor (the top of the highest slab still holding material there).
+//! The material of a 2.5D job is a stack of slabs between the heights at which the program cuts
+//! flat, each a cross-section kept as a signed distance (positive in material, eq. 9) sampled on
+//! a lattice of spacing `h`, truncated to `±2h` and stored sparsely in 16 × 16 tiles (after the
+//! adaptively sampled distance fields of Frisken et al.). A move cuts it by
+//! `d ← min(d, dist(q, P) − R)`, the distance to the axis path `P` in closed form (eq. 12 for a
+//! flat tool in a section, §4's `S = P ⊕ T`), and engagement is root finding on the field along
+//! the tool's ring. The field, the cutting and every measure are in `docs/simulation.md`.
 
 use super::SimOptions;
 use super::replay::Engine;

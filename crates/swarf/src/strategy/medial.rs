@@ -1,51 +1,24 @@
 //! C1 high-speed pocketing from the medial axis (paper 2, Elber, Cohen and Drake, and its
 //! planar predecessor MATHSM \[8\]).
 //!
-//! The tool-centre region of a level (the pocket less its walls grown by the tool radius) has a
-//! medial axis ([`crate::geom::medial`]): at each of its points the largest circle that fits.
-//! The program is made of such circles, as large as the pocket allows, joined by lines tangent
-//! to both (§2.2, "bi-tangent line segments ... the bridge connection between the two
-//! shapes"), so that the path is tangent-continuous (C1) wherever the tool cuts:
+//! The program is made of circles centred on the medial axis (`geom::medial`) of the
+//! tool-centre region ([`region`]), each as large as the pocket allows and the next placed where
+//! the Hausdorff distance between the two reaches the stepover (§2.1), joined by bi-tangent
+//! bridges (§2.2, Fig. 3), so that the path is tangent-continuous (C1) wherever the tool cuts.
+//! The tool enters by a helix and a spiral of semicircles at the largest circle of each piece of
+//! the axis, walks the branches depth first, and returns over the uncutting back half of each
+//! circle on a smaller circle, [`CUT_BACK`] times its radius (the cut-back return, §2.1,
+//! Fig. 2c; `--full-circles` turns it off). Circles smaller than [`RHO_MIN`] are not cut. The
+//! walk-through (entry, circles, bridges, the cut-back return, branches) is in `docs/medial.md`.
 //!
-//! 1. **Entry** at the largest circle of each connected piece of the axis: a helix of a small
-//!    radius round its centre (or a descent in air where the tool lands clear), then a spiral
-//!    of semicircles whose centres alternate between two points half a stepover apart (each
-//!    half turn grows the radius by half a stepover, and consecutive semicircles share their
-//!    tangent where they meet), out to the largest circle.
-//! 2. **Circles along the axis**: from a circle (c₀, ρ₀) the next one is placed where the
-//!    Hausdorff distance between the two circles, |c₁ − c₀| + |ρ₁ − ρ₀|, reaches the stepover
-//!    (§2.1, requirement 2: adjacent shapes a bounded distance apart, "the Hausdorff distance
-//!    between two circles is trivial to compute"). Every junction and end of the axis gets a
-//!    circle; the vertices where the axis merely bends (two Voronoi edges meeting, every few
-//!    tenths of a millimetre along a polygonised curve) are walked through.
-//! 3. **Bridges**: two circles run in the same direction have two outer bi-tangents (§2.2,
-//!    Fig. 3); the one on the side that keeps the direction is taken (on the right of the way
-//!    from one centre to the next for counter-clockwise circles — climb milling — on the left
-//!    for clockwise ones). Each circle is followed from where the bridge arrives at least until
-//!    it has swept the arc that lies outside the circle before it (the new material).
-//! 4. **Cut-back return** (§2.1, Fig. 2c: "cut and round the back half of the circular arc, in
-//!    each circle, making the tool return to its next cutting position faster"): the rest of
-//!    the circle cuts nothing (it lies inside the circle before), so the tool leaves it where
-//!    the new arc ends, on a circle of [`CUT_BACK`] times the radius tangent to it there, and
-//!    takes that circle's bi-tangent to the next one — a shorter way to the same place, and
-//!    tangent-continuous; at the feed times `--feed-boost` where the model says it cuts
-//!    nothing (the paper's other proposal: "make the tool move along these half back
-//!    portions much faster"). Where it would not be shorter, or would meet the next circle
-//!    past the start of its new arc, the tool goes round as before. `--full-circles` turns it
-//!    off.
-//! 5. **Branches**: the axis is walked depth first from the largest circle; when a branch ends
-//!    (in a corner, or where the walk meets a circle already cut round an island), the next
-//!    branch starts from its junction's circle, already cut: the tool links there through
-//!    cleared space (a rapid at depth when the way is clear, else over the material) and
-//!    continues from the point where that circle's bridge to the new branch leaves.
+#![doc = include_str!("../../../../docs/figures/medial_axis.svg")]
 //!
-//! The axis is that of [`region`]: the tool-centre region less what lies beyond half a tool
-//! radius outside the material, so that on an open side no circle is spent in the air.
+#![doc = include_str!("../../../../docs/figures/medial_shapes.svg")]
 //!
-//! Circles smaller than [`RHO_MIN`] are not cut (the tip of a branch into a sharp corner).
-//! Every arc is at most a half turn (G2/G3 with distinct ends).
+//! *Paper 2's Figs. 1(b), 1(c) and 2(c) on swarf's example cases, drawn by the `medial_figures`
+//! example.*
 
-use super::{Clearing, Context};
+use super::{Clearing, Context, Program};
 use crate::error::{Error, Result};
 use crate::geom::DVec2;
 use crate::geom::medial::{Axis, medial_axis};
@@ -53,7 +26,7 @@ use crate::model::Regions;
 use crate::plan::levels::{Levels, drive};
 use crate::plan::{LANDING_MARGIN, LayerGeom, Linker};
 use crate::sim::sweep::Path;
-use crate::toolpath::{MoveKind, Toolpath};
+use crate::toolpath::MoveKind;
 use std::f64::consts::{PI, TAU};
 
 /// Branches whose object angle is below this (degrees) are pruned from the axis.
@@ -397,7 +370,7 @@ impl Default for MedialOptions {
 impl Clearing for MedialOptions {
     const NAME: &'static str = "medial";
 
-    fn plan(&self, cx: &Context) -> Result<Option<Toolpath>> {
+    fn plan(&self, cx: &Context) -> Result<Option<Program>> {
         let axis = medial_axis(&region(cx.regions, cx.geom), MIN_OBJECT_ANGLE)
             .map_err(|e| Error::job("medial strategy", e))?;
         let runs = runs(&axis, cx.geom.step, cx.geom.r);
@@ -413,7 +386,7 @@ impl Clearing for MedialOptions {
             return Err(Error::job("medial strategy", "the tool fits nowhere in the pocket"));
         }
         let mut levels = MedialLevels { runs: &runs, step: cx.geom.step, cut_back: self.cut_back };
-        drive(cx.job, cx.regions, cx.link, cx.sim, cx.zs, cx.finish, &mut levels).map(Some)
+        drive(cx.job, cx.regions, cx.link, cx.sim, cx.zs, cx.finish, &mut levels).map(|tp| Some(tp.into()))
     }
 }
 

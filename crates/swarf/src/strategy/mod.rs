@@ -9,8 +9,8 @@
 //! - [`zigzag`]: direction-parallel rows at a settable angle, with a contour along the walls;
 //! - [`medial`]: tangent-continuous circles along the medial axis (paper 2);
 //! - [`spiral`]: one oscillator spiral from the inside out to the walls (paper 4), its damping
-//!   and start chosen by [`spiral_search`];
-//! - [`cleanup`]: extra passes where the others left material the tool can reach.
+//!   and start chosen by the spiral search (`spiral_search`);
+//! - `cleanup`: extra passes where the others left material the tool can reach.
 //!
 //! A strategy is added by writing its file (its options struct, which implements the
 //! crate-internal `Clearing` trait) and one arm of [`Strategy`] (and of the `each!` dispatch
@@ -35,7 +35,7 @@ pub use zigzag::ZigzagOptions;
 use crate::error::Result;
 use crate::model::{Job, REGION_TOL, Regions};
 use crate::plan::{LayerGeom, LinkOptions, Pass, PassKind, TOUCH_MARGIN};
-use crate::sim::SimOptions;
+use crate::sim::{Replay, Rest, SimOptions};
 use crate::toolpath::Toolpath;
 
 /// A clearing strategy with its options.
@@ -84,6 +84,22 @@ pub(crate) struct Context<'a> {
     pub finish: &'a [(f64, Vec<Pass>)],
 }
 
+/// A strategy's program of every level, with the simulation of it as it will be written when
+/// the strategy already made one (the spiral's search simulates its choice): the job then uses
+/// it as its proof instead of simulating the program again.
+pub(crate) struct Program {
+    /// The program.
+    pub toolpath: Toolpath,
+    /// Its replay and rest on the job's material model, with the job's simulation settings.
+    pub proof: Option<(Replay, Rest)>,
+}
+
+impl From<Toolpath> for Program {
+    fn from(toolpath: Toolpath) -> Program {
+        Program { toolpath, proof: None }
+    }
+}
+
 /// What each strategy's options do (the one thing a new strategy's file implements).
 pub(crate) trait Clearing {
     /// Its name (on the command line, in reports and program headers).
@@ -98,7 +114,7 @@ pub(crate) trait Clearing {
         0.0
     }
     /// The program of every level, or `None` when the strategy finds nothing to cut.
-    fn plan(&self, cx: &Context) -> Result<Option<Toolpath>>;
+    fn plan(&self, cx: &Context) -> Result<Option<Program>>;
 }
 
 impl Strategy {
@@ -159,7 +175,7 @@ impl Strategy {
 
     /// The program of every level of a 2.5D job, or `None` when the strategy finds nothing to
     /// cut.
-    pub(crate) fn plan(&self, cx: &Context) -> Result<Option<Toolpath>> {
+    pub(crate) fn plan(&self, cx: &Context) -> Result<Option<Program>> {
         each!(self, o => o.plan(cx))
     }
 }
@@ -180,7 +196,7 @@ pub fn finish_passes(job: &Job, regions: &Regions, link: &LinkOptions, wall_marg
 
 /// Passes that are the same at every level, with the clean-up passes for what they leave, as a
 /// program (`None` when there are none).
-fn same_passes(cx: &Context, mut passes: Vec<Pass>) -> Result<Option<Toolpath>> {
+fn same_passes(cx: &Context, mut passes: Vec<Pass>) -> Result<Option<Program>> {
     let t = std::time::Instant::now();
     let extra = cleanup::passes(cx.geom, cx.link.climb, &passes);
     log::debug!("cleanup {:.3} s, {} passes", t.elapsed().as_secs_f64(), extra.len());
@@ -189,7 +205,8 @@ fn same_passes(cx: &Context, mut passes: Vec<Pass>) -> Result<Option<Toolpath>> 
         return Ok(None);
     }
     let mut levels = crate::plan::levels::SamePasses { passes: &passes };
-    crate::plan::levels::drive(cx.job, cx.regions, cx.link, cx.sim, cx.zs, cx.finish, &mut levels).map(Some)
+    crate::plan::levels::drive(cx.job, cx.regions, cx.link, cx.sim, cx.zs, cx.finish, &mut levels)
+        .map(|tp| Some(tp.into()))
 }
 
 #[cfg(test)]

@@ -10,12 +10,11 @@
 //! right. Inside-out order cuts toward the walls, so the walls are kept on the right;
 //! outside-in cuts away from them, so they are kept on the left. Conventional is the reverse.
 
-use super::{Clearing, Context};
+use super::{Clearing, Context, Program};
 use crate::error::Result;
 use crate::geom::{Area, DVec2};
 use crate::model::REGION_TOL;
 use crate::plan::{LayerGeom, Pass, PassKind};
-use crate::toolpath::Toolpath;
 
 /// Order of contour-parallel passes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -48,7 +47,7 @@ impl Default for OffsetOptions {
 impl Clearing for OffsetOptions {
     const NAME: &'static str = "offset";
 
-    fn plan(&self, cx: &Context) -> Result<Option<Toolpath>> {
+    fn plan(&self, cx: &Context) -> Result<Option<Program>> {
         super::same_passes(cx, passes(cx.geom, cx.link.climb, self.order))
     }
 }

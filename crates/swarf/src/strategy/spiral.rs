@@ -1,55 +1,28 @@
 //! Oscillator spirals (paper 4, Kalmar-Nagy & Erdim): one smooth path from the inside of the
 //! pocket out to its walls, with no link.
 //!
-//! The tool-centre region of the job (the pocket less its walls grown by the tool radius,
-//! [`super::medial::region`]) is embedded in an implicit function `f`, positive inside and zero
-//! on the boundary ([`crate::implicit::region::AreaField`], §3). Read as the energy of an
-//! oscillator with negative damping ζ (eq. 6), `f` gives a trajectory that spirals out from the
-//! maximum of `f` across its level sets until it reaches the boundary, which it then follows for
-//! one turn ([`crate::implicit::oscillator`]). The program:
+//! The tool-centre region ([`super::medial::region`]) is embedded in an implicit function `f`,
+//! positive inside and zero on the boundary ([`crate::implicit::region::AreaField`], §3), and
+//! `f`, read as the energy of an oscillator with negative damping ζ (eq. 6), gives a trajectory
+//! that spirals out from a helix entry at the maximum of `f` across its level sets to the
+//! boundary and follows it for one turn ([`crate::implicit::oscillator`]); ζ is constant or
+//! chosen per level for the stepover and the engagement, and the trajectory is written as
+//! tangent-continuous G2/G3 biarcs. A region with islands gets a spiral over its island-free
+//! core only ([`core_level`], [`CORE_FRACTION`]) and the adaptive strategy (paper 1) clears the
+//! rest; the engagement floor is chosen by the spiral search of §4, Figs. 8–9. The walk-through
+//! (entry, spiral, output, islands, the floor) is in `docs/spiral.md`, the mathematics in
+//! `docs/implicit.md`.
 //!
-//! 1. **Entry**: a helix round the start point (the maximum of `f`, or `--spiral-start`), of
-//!    radius at most half the tool's and within the region, ending a sixth of a turn before the
-//!    point where the spiral leaves the bore; a biarc joins the two tangentially.
-//! 2. **The spiral**: ζ either constant (`--zeta`) or chosen per level so that successive turns
-//!    are at most a stepover apart and, where a turn curves tightly, no further apart than
-//!    keeps the engagement at the reference ([`crate::implicit::oscillator::engagement_spacing`]).
-//!    It ends with one turn along the level `f = TRACK_LEVEL` (a few µm inside the boundary).
-//! 3. **Output**: the integrated polyline, with the integrator's own tangent at each point,
-//!    is written as biarcs within the arc tolerance ([`crate::geom::biarc`]), so the program
-//!    is G2/G3 arcs meeting tangentially throughout. Where the levels bend tightly (the
-//!    rounded corners of a polygonal region, and the turns just inside them) arcs within the
-//!    tolerance are a few hundredths of a millimetre long, and a run of them reads as a
-//!    polygon at the scale of a controller's look-ahead or a simulator's grid. There a biarc
-//!    is widened until its arcs are at least [`MIN_ARC`] long, if it then cuts the bend
-//!    inwards by at most [`CORNER_CUT`] and strays outwards by no more than the tolerance: it
-//!    comes no nearer the walls than the tolerance already allows.
+#![doc = include_str!("../../../../docs/figures/spiral_pockets.svg")]
 //!
-//! **What the method cannot do, and what is done instead.** A spiral covers a simply connected
-//! region: with an island, the levels of `f` split round it, and the trajectory cannot follow
-//! both parts. In a piece of the region with islands the spiral stops at the level where its
-//! set would close round an island ([`core_level`]), or at half of `f` at the start if that
-//! is lower down ([`CORE_FRACTION`]), and the adaptive strategy (paper 1) clears the rest
-//! from what the material model says is left. A job whose tool-centre region falls apart (a
-//! pocket with narrow necks) gets one spiral per piece, each with its entry.
-//!
-//! The region's own `f` is scaled down with the distance from the start (`Shaped`), so that no
-//! level runs the length of a long leg at once (a ridge of `f`).
-//!
-//! **The floor.** Where a level curves tightly the engagement limit asks for a small gap; it
-//! is never asked below a floor (a fraction of the stepover), or every turn of a level with a
-//! sharp tip would crawl. A wide floor is fast and engages the tool more in tight turns.
-//! Unless a floor or a constant ζ is given, the spiral search (`optimise_spiral`) chooses it:
-//! the loop of §4, Figs. 8–9, which plans a spiral for each candidate (floors, and with
-//! `--optimise` start points), simulates them fastest first, and keeps the first that clears
-//! the pocket within the engagement bound.
+//! *The strategy's spirals on two example cases, drawn by the `spiral_figures` example.*
 
 use super::{AdaptiveOptions, Context};
 use crate::error::{Error, Result};
 use crate::geom::arcfit::Piece;
-use crate::geom::{Area, DVec2, biarc};
+use crate::geom::{DVec2, biarc};
 use crate::implicit::levels::Grid;
-use crate::implicit::oscillator::{self, Damping, EngagementLimit, Spiral, Turn, spiral};
+use crate::implicit::oscillator::{self, Damping, EngagementLimit, Spiral, Turn, spiral_on};
 use crate::implicit::region::AreaField;
 use crate::implicit::shape::{Field, maximum};
 use crate::model::{Job, Regions};
@@ -57,6 +30,7 @@ use crate::plan::levels::{Levels, drive};
 use crate::plan::{LayerGeom, LinkOptions, Linker};
 use crate::toolpath::{MoveKind, Toolpath};
 use std::f64::consts::TAU;
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// The level the last turn follows, mm inside the tool-centre region's boundary.
 pub const TRACK_LEVEL: f64 = 0.005;
@@ -73,7 +47,7 @@ pub const CORNER_RADIUS: f64 = 0.25;
 /// before the biarcs are fitted.
 pub const MIN_POINT_GAP: f64 = 0.01;
 
-/// Shortest chord wanted of a written arc, mm (see [`biarc::Tolerance::min_len`]).
+/// Shortest chord wanted of a written arc, mm (see `geom::biarc::Tolerance::min_len`).
 pub const MIN_ARC: f64 = 0.12;
 
 /// How far a written arc may cut inside the integrated spiral where it is widened to
@@ -162,13 +136,23 @@ pub fn plan_pieces(
     link: &LinkOptions,
     choice: &SpiralChoice,
 ) -> Result<(Vec<PiecePath>, bool)> {
-    let region = super::medial::region(regions, geom);
+    plan_pieces_in(job, &SpiralFields::new(regions, geom), geom, link, choice)
+}
+
+/// [`plan_pieces`] on the fields of the region's pieces, made once for every spiral the search
+/// tries.
+pub(crate) fn plan_pieces_in(
+    job: &Job,
+    fields: &SpiralFields,
+    geom: &LayerGeom,
+    link: &LinkOptions,
+    choice: &SpiralChoice,
+) -> Result<(Vec<PiecePath>, bool)> {
     let mut out = Vec::new();
     let mut islands = false;
-    for piece in region.components() {
-        let holes = piece.polys.iter().any(|p| !p.holes.is_empty());
-        islands |= holes;
-        if let Some(p) = plan_piece(job, &piece, geom, link, choice, holes)? {
+    for piece in &fields.pieces {
+        islands |= piece.holes;
+        if let Some(p) = plan_piece(job, piece, geom, link, choice)? {
             out.push(p);
         }
     }
@@ -178,15 +162,88 @@ pub fn plan_pieces(
     Ok((out, islands))
 }
 
+/// What every spiral over a job's region shares, whatever its damping: each connected piece of
+/// the region, its implicit function with the piece's corners rounded, the maximum of that
+/// function, and the samples of the function shaped from each start (the grid the core level
+/// and the ζ per level read). The spiral search plans a dozen spirals over the same region:
+/// made once, these are most of a spiral's planning.
+pub(crate) struct SpiralFields {
+    pieces: Vec<PieceField>,
+}
+
+/// One connected piece of the region.
+struct PieceField {
+    /// It has islands.
+    holes: bool,
+    /// Its rounded implicit function and where that is largest, unless the piece vanishes when
+    /// rounded.
+    shape: Option<PieceShape>,
+}
+
+struct PieceShape {
+    base: AreaField,
+    top: DVec2,
+    fmax: f64,
+    /// [`Grid::of_field`] of the shaped function from each start asked for so far.
+    grids: Mutex<Vec<(DVec2, Arc<OnceLock<Option<Grid>>>)>>,
+}
+
+impl SpiralFields {
+    /// The fields of the region of `regions` and `geom` the spiral covers (that of the medial
+    /// strategy).
+    pub(crate) fn new(regions: &Regions, geom: &LayerGeom) -> SpiralFields {
+        let region = super::medial::region(regions, geom);
+        let pieces = region
+            .components()
+            .into_iter()
+            .map(|piece| {
+                let holes = piece.polys.iter().any(|p| !p.holes.is_empty());
+                // the region with its convex corners rounded (an opening by CORNER_RADIUS)
+                let rounded = piece.offset(-CORNER_RADIUS, 1e-3).offset(CORNER_RADIUS, 1e-3);
+                let shape = (!rounded.is_empty()).then(|| AreaField::new(&rounded)).and_then(|base| {
+                    let (lo, hi) = base.bounds()?;
+                    let (top, fmax) = maximum(&base, lo, hi).unwrap_or((lo, 0.0));
+                    Some(PieceShape { base, top, fmax, grids: Mutex::new(Vec::new()) })
+                });
+                PieceField { holes, shape }
+            })
+            .collect();
+        SpiralFields { pieces }
+    }
+}
+
+impl PieceShape {
+    /// The shaped function from `start` and its samples (sampled once for every spiral from
+    /// there).
+    fn shaped(&self, start: DVec2) -> (Shaped<'_>, Arc<OnceLock<Option<Grid>>>) {
+        let field = Shaped { f: &self.base, s: start, l: SHAPE_LENGTH * self.fmax.max(1e-3) };
+        let cell = {
+            let mut grids = self.grids.lock().unwrap_or_else(|e| e.into_inner());
+            match grids.iter().find(|(s, _)| *s == start) {
+                Some((_, c)) => c.clone(),
+                None => {
+                    let c = Arc::new(OnceLock::new());
+                    grids.push((start, c.clone()));
+                    c
+                }
+            }
+        };
+        cell.get_or_init(|| Grid::of_field(&field));
+        (field, cell)
+    }
+}
+
 /// The lowest level of `f` down to which the set `f ≥ c` round `start` is simply connected
 /// (it has not yet closed round an island), from `f` sampled on a 256² grid: bisection on c,
 /// each test a flood fill of the set from the start and of the rest from the grid's border
 /// (4- and 8-connected, so that a diagonal pair of cells neither closes nor opens a hole). A
 /// spiral out to a level above it covers a simply connected core.
 pub fn core_level(field: &dyn Field, start: DVec2, f_floor: f64) -> Option<f64> {
-    let (lo, hi) = field.bounds()?;
-    let pad = (hi - lo) * 0.02;
-    let grid = Grid::sample(field, lo - pad, hi + pad, 256);
+    core_level_on(field, &Grid::of_field(field)?, start, f_floor)
+}
+
+/// [`core_level`] on `grid`, [`Grid::of_field`] of `field`.
+fn core_level_on(field: &dyn Field, grid: &Grid, start: DVec2, f_floor: f64) -> Option<f64> {
     // (nodes: one more than cells each way)
     let (nx, ny) = (grid.nx + 1, grid.ny + 1);
     let at = |i: usize, j: usize| grid.vals[j * nx + i].v;
@@ -292,28 +349,22 @@ pub const SHAPE_LENGTH: f64 = 1.0;
 
 fn plan_piece(
     job: &Job,
-    piece: &Area,
+    piece: &PieceField,
     geom: &LayerGeom,
     link: &LinkOptions,
     choice: &SpiralChoice,
-    islands: bool,
 ) -> Result<Option<PiecePath>> {
-    // the region with its convex corners rounded (an opening by CORNER_RADIUS)
-    let rounded = piece.offset(-CORNER_RADIUS, 1e-3).offset(CORNER_RADIUS, 1e-3);
-    if rounded.is_empty() {
-        return Ok(None);
-    }
-    let base = AreaField::new(&rounded);
-    let Some((lo, hi)) = base.bounds() else { return Ok(None) };
-    let (top, fmax) = maximum(&base, lo, hi).unwrap_or((lo, 0.0));
-    let start = choice.start.unwrap_or(top);
-    let field = Shaped { f: &base, s: start, l: SHAPE_LENGTH * fmax.max(1e-3) };
+    let islands = piece.holes;
+    let Some(shape) = &piece.shape else { return Ok(None) };
+    let start = choice.start.unwrap_or(shape.top);
+    let (field, grid) = shape.shaped(start);
+    let Some(grid) = grid.get().and_then(Option::as_ref) else { return Ok(None) };
     let f0 = field.eval(start).v;
     // with islands, out to a level a quarter of a stepover above the one where the spiral's
     // set would close round an island (the level there pinches to a point), and no further
     // than CORE_FRACTION of the way down
     let f_end = match islands {
-        true => match core_level(&field, start, TRACK_LEVEL) {
+        true => match core_level_on(&field, grid, start, TRACK_LEVEL) {
             Some(c) => (c + 0.25 * geom.step).max(CORE_FRACTION * f0),
             None => return Ok(None),
         },
@@ -341,7 +392,7 @@ fn plan_piece(
         accept_gap: Some(f64::INFINITY),
         ..Default::default()
     };
-    let sp = match spiral(&field, start, &opts) {
+    let sp = match spiral_on(&field, start, &opts, Some(grid)) {
         Ok(sp) => sp,
         // (with islands the adaptive passes clear what a spiral cannot)
         Err(_) if islands => return Ok(None),
@@ -356,8 +407,13 @@ fn plan_piece(
 
 /// Builds the program of a level job from its spirals (with the adaptive passes of `adaptive`
 /// round islands).
-pub(crate) fn link_spiral(cx: &Context, adaptive: &AdaptiveOptions, choice: &SpiralChoice) -> Result<Toolpath> {
-    let (pieces, islands) = plan_pieces(cx.job, cx.regions, cx.geom, cx.link, choice)?;
+pub(crate) fn link_spiral(
+    cx: &Context,
+    fields: &SpiralFields,
+    adaptive: &AdaptiveOptions,
+    choice: &SpiralChoice,
+) -> Result<Toolpath> {
+    let (pieces, islands) = plan_pieces_in(cx.job, fields, cx.geom, cx.link, choice)?;
     let first = pieces.first().map_or_else(|| cx.geom.centres.bounds().map_or(DVec2::ZERO, |(lo, _)| lo), |p| p.start);
     if islands {
         let mut levels = super::adaptive::AdaptiveLevels::new(cx, adaptive, first, |l: &mut Linker, z| {
@@ -527,6 +583,7 @@ pub fn candidates(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geom::Area;
 
     #[test]
     fn the_core_of_a_pocket_with_an_island_stops_short_of_the_island() {

@@ -2,14 +2,16 @@
 //! planned, the fastest simulated first, the first that clears the pocket within the
 //! engagement bound kept; and the baseline of the docs' table, the best constant ζ.
 
-use super::spiral::{ENGAGEMENT_FLOOR, SpiralChoice, SpiralOptions, Trial, TrialSim, candidates, link_spiral};
-use super::{Clearing, Context, Strategy};
+use super::spiral::{
+    ENGAGEMENT_FLOOR, SpiralChoice, SpiralFields, SpiralOptions, Trial, TrialSim, candidates, link_spiral,
+};
+use super::{Clearing, Context, Program, Strategy};
 use crate::error::{Error, Result, Setting};
 use crate::model::{Job, Regions};
 use crate::plan::{LayerGeom, LinkOptions};
 use crate::post;
 use crate::report::{self, Report};
-use crate::sim::SimOptions;
+use crate::sim::{Replay, Rest, SimOptions};
 use crate::toolpath::Toolpath;
 
 // (the spiral's options are in `spiral.rs`; what they do as a strategy is the search's)
@@ -40,14 +42,16 @@ impl Clearing for SpiralOptions {
         self.adaptive.wall_slack()
     }
 
-    fn plan(&self, cx: &Context) -> Result<Option<Toolpath>> {
+    fn plan(&self, cx: &Context) -> Result<Option<Program>> {
         plan_spiral(cx, self).map(Some)
     }
 }
 
 /// The spiral program of a level job: the choice of `optimise_spiral` unless the options
 /// pin ζ or the floor; when no candidate was feasible, the program says so in a note at its start.
-pub(crate) fn plan_spiral(cx: &Context, opts: &SpiralOptions) -> Result<Toolpath> {
+/// The search's simulation of its choice is the program's proof (it simulated the program as it
+/// will be written, with the job's simulation settings).
+pub(crate) fn plan_spiral(cx: &Context, opts: &SpiralOptions) -> Result<Program> {
     let mut missed = None;
     let (choice, planned) = match (opts.zeta, opts.floor) {
         (None, None) => {
@@ -75,14 +79,14 @@ pub(crate) fn plan_spiral(cx: &Context, opts: &SpiralOptions) -> Result<Toolpath
     };
     // the optimiser's program of the choice is the one wanted, unless finishing passes
     // follow it
-    let mut tp = match planned {
-        Some(tp) if cx.finish.is_empty() => tp,
-        _ => link_spiral(cx, &opts.adaptive, &choice)?,
+    let mut program: Program = match planned {
+        Some(p) if cx.finish.is_empty() => p,
+        _ => link_spiral(cx, &SpiralFields::new(cx.regions, cx.geom), &opts.adaptive, &choice)?.into(),
     };
     if let Some(text) = missed {
-        tp.notes.insert(0, crate::toolpath::Note { at: 0, text });
+        program.toolpath.notes.insert(0, crate::toolpath::Note { at: 0, text });
     }
-    Ok(tp)
+    Ok(program)
 }
 
 /// The loop of paper 4 §4 (Figs. 8–9): chooses ζ (per level, through the floor of the gaps
@@ -104,14 +108,17 @@ pub(crate) fn optimise_spiral(cx: &Context, opts: &SpiralOptions) -> Result<(Spi
     optimise_spiral_planned(cx, opts).map(|(choice, trials, _)| (choice, trials))
 }
 
-/// `optimise_spiral`, with the program of the choice as planned (without finishing passes).
-fn optimise_spiral_planned(cx: &Context, opts: &SpiralOptions) -> Result<(SpiralChoice, Vec<Trial>, Option<Toolpath>)> {
+/// `optimise_spiral`, with the program of the choice as planned (without finishing passes) and
+/// its simulation, when it was simulated.
+fn optimise_spiral_planned(cx: &Context, opts: &SpiralOptions) -> Result<(SpiralChoice, Vec<Trial>, Option<Program>)> {
     use rayon::prelude::*;
     let job = cx.job;
     let bound = spiral_bound(job);
     let candidates = candidates(cx.regions, cx.geom, opts.start, opts.optimise)?;
+    let fields = SpiralFields::new(cx.regions, cx.geom);
     let mut planned: Vec<Option<(Toolpath, Toolpath)>> =
-        candidates.par_iter().map(|c| plan_spiral_trial(cx, opts, c)).collect();
+        candidates.par_iter().map(|c| plan_spiral_trial(cx, &fields, opts, c)).collect();
+    let mut proofs: Vec<Option<(Replay, Rest)>> = (0..candidates.len()).map(|_| None).collect();
     let mut trials: Vec<Trial> = candidates
         .iter()
         .zip(&planned)
@@ -137,8 +144,9 @@ fn optimise_spiral_planned(cx: &Context, opts: &SpiralOptions) -> Result<(Spiral
         }
         let Some((_, tp)) = &planned[i] else { continue };
         simulated += 1;
-        let sim = judge_spiral(job, cx.regions, cx.sim, tp)?;
+        let (sim, proof) = judge_spiral(job, cx.regions, cx.sim, tp)?;
         trials[i].sim = Some(sim);
+        proofs[i] = Some(proof);
         if sim.feasible {
             best = Some(i);
             break;
@@ -147,7 +155,8 @@ fn optimise_spiral_planned(cx: &Context, opts: &SpiralOptions) -> Result<(Spiral
     let best = best
         .or_else(|| nearest_miss(&trials, bound))
         .ok_or_else(|| Error::job("spiral strategy", "no spiral could be made from any start or ζ"))?;
-    Ok((trials[best].choice, trials, planned.swap_remove(best).map(|(tp, _)| tp)))
+    let proof = proofs.swap_remove(best);
+    Ok((trials[best].choice, trials, planned.swap_remove(best).map(|(toolpath, _)| Program { toolpath, proof })))
 }
 
 /// Of the simulated trials, the one that missed by least: fewest gouges, then least rest
@@ -202,26 +211,33 @@ fn spiral_bound(job: &Job) -> f64 {
 
 /// The program of one spiral candidate as planned and as it will be written (quantised), or
 /// `None` where the spiral cannot be made.
-fn plan_spiral_trial(cx: &Context, opts: &SpiralOptions, choice: &SpiralChoice) -> Option<(Toolpath, Toolpath)> {
+fn plan_spiral_trial(
+    cx: &Context,
+    fields: &SpiralFields,
+    opts: &SpiralOptions,
+    choice: &SpiralChoice,
+) -> Option<(Toolpath, Toolpath)> {
     let trial = Context { finish: &[], ..*cx };
-    let tp = link_spiral(&trial, &opts.adaptive, choice).ok()?;
+    let tp = link_spiral(&trial, fields, &opts.adaptive, choice).ok()?;
     let mut written = tp.clone();
     written.quantize(post::COORD_STEP, post::CENTER_STEP);
     Some((tp, written))
 }
 
-/// Simulates a spiral candidate and judges it by the optimiser's criteria.
-fn judge_spiral(job: &Job, regions: &Regions, sim: &SimOptions, tp: &Toolpath) -> Result<TrialSim> {
+/// Simulates a spiral candidate (as it will be written) and judges it by the optimiser's
+/// criteria; the simulation too.
+fn judge_spiral(job: &Job, regions: &Regions, sim: &SimOptions, tp: &Toolpath) -> Result<(TrialSim, (Replay, Rest))> {
     let (rp, rest) = crate::sim::simulate(job, regions, sim, tp, &mut |_| {})?;
     let mut rep = Report::default();
     report::fill(&mut rep, tp, &rp, &rest, job.cutting.rapid_rate);
     let bound = spiral_bound(job);
-    Ok(TrialSim {
+    let judged = TrialSim {
         gouges: rep.gouges,
         rest: rep.rest_fraction,
         p99_deg: rep.engagement_deg.p99,
         feasible: rep.rest_fraction <= REST_LIMIT && rep.gouges == 0 && rep.engagement_deg.p99 <= bound,
-    })
+    };
+    Ok((judged, (rp, rest)))
 }
 
 /// What [`spiral_study`] measured of one job.
@@ -259,11 +275,12 @@ pub fn spiral_study(job: &Job, opts: &SpiralOptions, link: &LinkOptions, sim: &S
 /// small ζ makes a long program): for comparisons, not for planning.
 pub(crate) fn best_fixed_zeta(cx: &Context, opts: &SpiralOptions) -> Result<Option<(f64, Trial)>> {
     let job = cx.job;
+    let fields = SpiralFields::new(cx.regions, cx.geom);
     let try_z = |z: f64| -> Result<Trial> {
         let choice = SpiralChoice { zeta: Some(z), ..Default::default() };
-        let tp = plan_spiral_trial(cx, opts, &choice).map(|(_, written)| written);
+        let tp = plan_spiral_trial(cx, &fields, opts, &choice).map(|(_, written)| written);
         let sim = match &tp {
-            Some(tp) => Some(judge_spiral(job, cx.regions, cx.sim, tp)?),
+            Some(tp) => Some(judge_spiral(job, cx.regions, cx.sim, tp)?.0),
             None => None,
         };
         Ok(Trial { choice, time_min: tp.map(|tp| tp.totals(job.cutting.rapid_rate).time_min), sim })

@@ -4,11 +4,10 @@
 //! level. Row directions alternate (that is what zigzag means), so climb and conventional
 //! alternate on the rows; the wall contour keeps the chosen milling direction.
 
-use super::{Clearing, Context};
+use super::{Clearing, Context, Program};
 use crate::error::{Error, Result, Setting};
 use crate::geom::{DVec2, polyline_length};
 use crate::plan::{LayerGeom, Pass, PassKind};
-use crate::toolpath::Toolpath;
 
 /// The zigzag strategy's options.
 #[derive(Debug, Clone, PartialEq)]
@@ -38,7 +37,7 @@ impl Clearing for ZigzagOptions {
         Ok(())
     }
 
-    fn plan(&self, cx: &Context) -> Result<Option<Toolpath>> {
+    fn plan(&self, cx: &Context) -> Result<Option<Program>> {
         super::same_passes(cx, passes(cx.geom, cx.link.climb, self.angle_deg))
     }
 }

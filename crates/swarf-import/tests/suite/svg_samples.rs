@@ -6,9 +6,9 @@ use std::path::Path;
 use swarf_import::svg::read_svg;
 use swarf_import::{Drawing, ImportError, ImportOptions, Role};
 
-const SHAPES: &str = include_str!("data/svg/svg2gcode_shapes.svg");
-const SMOOTH: &str = include_str!("data/svg/svg2gcode_smooth_curves.svg");
-const LOGO: &str = include_str!("data/svg/svg2gcode_Vanderbilt_Commodores_logo.svg");
+const SHAPES: &str = include_str!("../data/svg/svg2gcode_shapes.svg");
+const SMOOTH: &str = include_str!("../data/svg/svg2gcode_smooth_curves.svg");
+const LOGO: &str = include_str!("../data/svg/svg2gcode_Vanderbilt_Commodores_logo.svg");
 
 fn read(svg: &str) -> Result<Drawing, ImportError> {
     read_svg(Path::new("sample.svg"), svg.as_bytes(), &ImportOptions::default())

@@ -10,7 +10,7 @@ use swarf::sim::SimOptions;
 use swarf::strategy::{MedialOptions, Strategy};
 use swarf::toolpath::Motion;
 
-mod common;
+use crate::common;
 
 // (the negated comparison makes NaN fail)
 #[allow(clippy::neg_cmp_op_on_partial_ord)]

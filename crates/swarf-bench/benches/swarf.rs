@@ -1,4 +1,4 @@
-//! swarf benchmarks (criterion, `cargo bench -p swarf`), all on `examples/cases/pocket_islands.json`
+//! swarf benchmarks (criterion, `cargo bench -p swarf-bench`), all on `examples/cases/pocket_islands.json`
 //! (100 × 80 mm pocket, two islands, Ø6 tool):
 //!
 //! - `engagement/exact`, `engagement/pixel`: engagement samples per second of each method alone.

@@ -14,17 +14,33 @@ use swarf::sim::SimOptions;
 use swarf::strategy::{SpiralOptions, Strategy};
 use swarf::toolpath::{Motion, MoveKind};
 
-mod common;
+use crate::common;
 
 fn case(name: &str) -> swarf::model::Job {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cases").join(name);
     swarf::io::load_job(&path, &Default::default()).unwrap_or_else(|e| panic!("{e}"))
 }
 
+// One test per case (both milling directions), so that the harness runs them side by side.
+
 #[test]
-fn spirals_are_clean_smooth_and_in_one_piece() {
+fn the_round_pocket_spirals_are_clean_smooth_and_in_one_piece() {
+    clean_smooth_and_in_one_piece("round_pocket.json");
+}
+
+#[test]
+fn the_square_pocket_spirals_are_clean_smooth_and_in_one_piece() {
+    clean_smooth_and_in_one_piece("square_pocket.json");
+}
+
+#[test]
+fn the_l_pocket_spirals_are_clean_smooth_and_in_one_piece() {
+    clean_smooth_and_in_one_piece("l_pocket.json");
+}
+
+fn clean_smooth_and_in_one_piece(name: &str) {
     let mut bad = Vec::new();
-    for name in ["round_pocket.json", "square_pocket.json", "l_pocket.json"] {
+    {
         let job = case(name);
         for climb in [true, false] {
             let opts = RoughOptions {

@@ -8,7 +8,7 @@
 //! To (re)write the golden files after an intended change of the output:
 //!
 //! ```text
-//! SWARF_BLESS=1 cargo test -p swarf --test post_golden
+//! SWARF_BLESS=1 cargo test -p swarf --test suite post_golden::
 //! ```
 //!
 //! and review the diff before committing it. When LinuxCNC's `rs274` is on PATH, both golden

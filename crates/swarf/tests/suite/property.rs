@@ -451,7 +451,25 @@ fn run(case: &Case) -> (Vec<String>, String) {
     };
     let t = Instant::now();
     let mut problems = Vec::new();
-    let out = match rough(&case.job, &opts, &mut |_, _| {}) {
+    // planned once: the medial path is looked at as planned, before its coordinates are rounded
+    // to the post's micrometre (a bridge a few tenths of a millimetre long between two small
+    // circles then turns by up to a few degrees in print; the example cases check the written
+    // program), then written and proven as `rough` does
+    let planned = match swarf::job::rough::plan(&case.job, &opts) {
+        Ok(Some(p)) => p,
+        Ok(None) => return (vec!["rough() failed: the strategy found nothing to cut".into()], String::new()),
+        Err(e) => return (vec![format!("rough() failed: {e}")], String::new()),
+    };
+    if matches!(case.strategy, Strategy::Medial(_)) {
+        let turns = planned.toolpath.cutting_turns();
+        let worst = turns.iter().copied().fold((0, 0.0f64), |a, b| if b.1 > a.1 { b } else { a });
+        if worst.1 > 1.0 {
+            let n = turns.iter().filter(|t| t.1 > 1.0).count();
+            problems
+                .push(format!("{n} turns above 1° between cutting moves (worst {:.2}° at move {})", worst.1, worst.0));
+        }
+    }
+    let out = match swarf::job::rough::rough_planned(&case.job, &opts, planned, t, &mut |_, _| {}) {
         Ok(o) => o,
         Err(e) => return (vec![format!("rough() failed: {e}")], String::new()),
     };
@@ -468,19 +486,6 @@ fn run(case: &Case) -> (Vec<String>, String) {
             "rest_fraction {:.5} (rest {:.2} mm² of {:.1} mm² reachable, {:.2} mm³)",
             r.rest_fraction, r.rest_area_mm2, r.reachable_area_mm2, r.rest_volume_mm3
         ));
-    }
-    if matches!(case.strategy, Strategy::Medial(_)) {
-        // the planned path, before its coordinates are rounded to the post's micrometre (a
-        // bridge a few tenths of a millimetre long between two small circles then turns by
-        // up to a few degrees in print; the example cases check the written program)
-        let planned = swarf::job::rough::plan(&case.job, &opts).ok().flatten().map(|p| p.toolpath);
-        let turns = planned.as_ref().map_or_else(Vec::new, |t| t.cutting_turns());
-        let worst = turns.iter().copied().fold((0, 0.0f64), |a, b| if b.1 > a.1 { b } else { a });
-        if worst.1 > 1.0 {
-            let n = turns.iter().filter(|t| t.1 > 1.0).count();
-            problems
-                .push(format!("{n} turns above 1° between cutting moves (worst {:.2}° at move {})", worst.1, worst.0));
-        }
     }
     let room = room_for_helix(case);
     if room && r.plunges != 0 {
@@ -567,7 +572,7 @@ fn run_all(name: &str, seeds: std::ops::Range<u64>, make: fn(u64, &str) -> Case,
             over_bound.push(format!("seed {}: {}", case.seed, problems.join("; ")));
         } else if !problems.is_empty() {
             failures.push(format!(
-                "seed {} ({}), flags {}:\n  {}\n  reproduce: PROP_SEEDS={} cargo test -p swarf --test property\n  case JSON: {}",
+                "seed {} ({}), flags {}:\n  {}\n  reproduce: PROP_SEEDS={} cargo test -p swarf --test suite property::\n  case JSON: {}",
                 case.seed,
                 case.what,
                 flags(&case.strategy, &case.link, case.res),
@@ -650,7 +655,7 @@ fn parallel(name: &str, seeds: std::ops::Range<u64>, strategy: &str) {
     results.sort_by_key(|(c, _)| c.seed);
     let describe = |c: &Case, p: &[String]| {
         format!(
-            "seed {} ({}), flags {}:\n  {}\n  reproduce: PROP_SEEDS={} cargo test -p swarf --test property\n  case JSON: {}",
+            "seed {} ({}), flags {}:\n  {}\n  reproduce: PROP_SEEDS={} cargo test -p swarf --test suite property::\n  case JSON: {}",
             c.seed,
             c.what,
             flags(&c.strategy, &c.link, c.res),

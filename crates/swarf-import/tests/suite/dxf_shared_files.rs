@@ -2,7 +2,7 @@
 //! in `SWARF_PARTS_DXF`), prints what was read and checks the known results. Ignored by default;
 //! skips when the folder is missing, as it is in a user's clone.
 //!
-//! `cargo test -p swarf-import --test dxf_shared_files -- --ignored --nocapture`
+//! `cargo test -p swarf-import --test suite dxf_shared_files:: -- --ignored --nocapture`
 
 use std::path::PathBuf;
 use swarf_import::{ImportOptions, read_drawing};

@@ -1,4 +1,4 @@
-//! The two simulators side by side (criterion, `cargo bench -p swarf --bench sim`): the raster
+//! The two simulators side by side (criterion, `cargo bench -p swarf-bench --bench sim`): the raster
 //! ([`RasterSim`]) and the distance fields ([`SdfSim`], paper 4 §4) replaying the same adaptive
 //! program of `l_pocket` and `round_pocket`, at equal memory.
 //!

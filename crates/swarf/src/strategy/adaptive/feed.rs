@@ -1,0 +1,124 @@
+//! The feed of paper 1 §5: higher where the engagement is low (chip thinning made up by
+//! `1 / sin θ`, up to the boost), changing gradually along the pass; and the pass emitted with
+//! it (simplified by Douglas–Peucker, §5.1, and arc-fitted).
+
+use super::engine::Engine;
+use crate::geom::simplify::douglas_peucker;
+use crate::geom::{DVec2, polyline_length};
+use crate::plan::{DP_TOL, Material};
+use crate::toolpath::MoveKind;
+use std::f64::consts::FRAC_PI_2;
+
+impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
+    /// Simplifies, arc-fits and appends the pass (the material was cut step by step already),
+    /// with the engagement-driven feed of §5 when it is on.
+    pub(super) fn emit(&mut self, pts: &[DVec2], rem: &[u32], z: f64) {
+        if pts.len() < 2 || polyline_length(pts) < 1e-6 {
+            return;
+        }
+        // the material model was cut step by step: do not cut it again
+        self.l.precut = true;
+        let base = self.l.feed;
+        let (res, d, boost) = (self.l.sim.grid().res, self.l.job.cutting.tool.diameter, self.l.link.feed_boost);
+        for (run, m) in feed_runs(pts, rem, res, self.c.r, d, boost) {
+            let simple = douglas_peucker(&run, DP_TOL);
+            self.l.fit_emit_feed(&simple, z, MoveKind::Cut, base * m);
+        }
+        self.l.precut = false;
+    }
+}
+
+/// Feed multiplier for engagement `theta` (radians) with the boost limit `boost`: chip thinning
+/// — below 90° the thickest chip of a flat end mill is `f_z·sin θ` — is made up by `1 / sin θ`,
+/// up to `boost`; air gets `boost`.
+fn feed_factor(theta: f64, boost: f64) -> f64 {
+    if theta >= FRAC_PI_2 { 1.0 } else { (1.0 / theta.sin().max(1e-9)).min(boost).max(1.0) }
+}
+
+/// Splits a pass into runs of one feed multiplier (paper 1 §5: higher feed where the engagement
+/// is low, changing gradually). The engagement of each step is read off the material it
+/// removed: `cells·res² / length` is the radial depth `a` of a straight cut, `θ = acos(1 − a/R)`.
+/// The multiplier at a point is the smallest of those within one tool diameter along the pass
+/// (so the feed is back down a diameter before the engagement rises), rounded down to a tenth;
+/// `boost ≤ 1` gives one run at the programmed feed.
+fn feed_runs(pts: &[DVec2], rem: &[u32], res: f64, r: f64, d: f64, boost: f64) -> Vec<(Vec<DVec2>, f64)> {
+    if boost <= 1.0 + 1e-9 || pts.len() < 2 || rem.len() != pts.len() {
+        return vec![(pts.to_vec(), 1.0)];
+    }
+    let n = pts.len();
+    let mut s = vec![0.0; n];
+    let mut m = vec![1.0; n];
+    for i in 1..n {
+        let len = (pts[i] - pts[i - 1]).length();
+        s[i] = s[i - 1] + len;
+        let a = if len > 1e-9 { rem[i] as f64 * res * res / len } else { 0.0 };
+        let theta = (1.0 - (a / r).min(2.0)).clamp(-1.0, 1.0).acos();
+        m[i] = feed_factor(theta, boost);
+    }
+    m[0] = m[1];
+    // the smallest multiplier within ±d along the pass
+    let mut lo = 0;
+    let mut hi = 0;
+    let mut sm = vec![1.0; n];
+    for i in 0..n {
+        while s[i] - s[lo] > d {
+            lo += 1;
+        }
+        hi = hi.max(i);
+        while hi + 1 < n && s[hi + 1] - s[i] <= d {
+            hi += 1;
+        }
+        let w = m[lo..=hi].iter().copied().fold(f64::INFINITY, f64::min);
+        sm[i] = ((w * 10.0 + 1e-9).floor() / 10.0).max(1.0);
+    }
+    // a step takes the multiplier of its end point; runs of equal multipliers
+    let mut out: Vec<(Vec<DVec2>, f64)> = Vec::new();
+    for i in 1..n {
+        match out.last_mut() {
+            Some((run, f)) if *f == sm[i] => run.push(pts[i]),
+            _ => out.push((vec![pts[i - 1], pts[i]], sm[i])),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn feed_factor_makes_up_chip_thinning_within_the_boost() {
+        assert_eq!(feed_factor(FRAC_PI_2, 2.0), 1.0);
+        assert_eq!(feed_factor(2.0, 2.0), 1.0);
+        assert!((feed_factor(60f64.to_radians(), 2.0) - 1.0 / 60f64.to_radians().sin()).abs() < 1e-12);
+        assert_eq!(feed_factor(0.0, 1.6), 1.6);
+        assert_eq!(feed_factor(10f64.to_radians(), 1.6), 1.6);
+    }
+
+    #[test]
+    fn feed_runs_rise_in_air_and_come_down_a_diameter_before_the_cut() {
+        // a straight pass: 20 mm of air, then 20 mm at radial depth 1.5 mm (R 3, θ 60°)
+        let (res, r, d) = (0.05, 3.0, 6.0);
+        let step = 0.6;
+        let pts: Vec<DVec2> = (0..=66).map(|i| DVec2::new(i as f64 * step, 0.0)).collect();
+        let cells = (1.5 * step / (res * res)).round() as u32;
+        let rem: Vec<u32> = (0..pts.len()).map(|i| if i as f64 * step > 20.0 { cells } else { 0 }).collect();
+        let runs = feed_runs(&pts, &rem, res, r, d, 1.5);
+        // off: one run at the programmed feed
+        assert_eq!(feed_runs(&pts, &rem, res, r, d, 1.0).len(), 1);
+        // the air gets the full boost, the cut 1 / sin 60° = 1.15 rounded down to 1.1
+        assert_eq!(runs.first().unwrap().1, 1.5);
+        assert_eq!(runs.last().unwrap().1, 1.1);
+        // the feed is down before the cut starts: the boosted run ends a diameter before 20 mm
+        let end_fast = runs[0].0.last().unwrap().x;
+        assert!(end_fast <= 20.0 - d + step + 1e-9, "{end_fast}");
+        // the runs join end to start, in order, and cover the pass
+        for w in runs.windows(2) {
+            assert_eq!(w[0].0.last(), w[1].0.first());
+        }
+        assert_eq!(runs[0].0[0], pts[0]);
+        assert_eq!(*runs.last().unwrap().0.last().unwrap(), *pts.last().unwrap());
+        // never above the boost, never below the programmed feed
+        assert!(runs.iter().all(|(_, m)| (1.0..=1.5).contains(m)));
+    }
+}
