@@ -911,6 +911,7 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
         prune: !a.exhaustive,
         ramp_deg: a.ramp_angle.unwrap_or(d.ramp_deg),
         clearance: a.clearance.unwrap_or(d.clearance),
+        ..d
     };
     opts.validate()?;
     let t0 = std::time::Instant::now();
@@ -958,14 +959,7 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
         let gcode = swarf::post::write(&tp, post, &header);
         let name = format!("{stem}.ngc");
         files.push((a.output_dir.join(&name), gcode.into_bytes()));
-        let (rest_max, rest_vol) = sp.rest.rest(i, 0.05);
-        let mut pic = serde_json::Value::Null;
-        if !a.no_pictures {
-            let pname = format!("{stem}_rest.png");
-            files.push((a.output_dir.join(&pname), sp.rest.png(i)?));
-            pic = serde_json::Value::String(pname);
-        }
-        programs.push(serde_json::json!({
+        let mut entry = serde_json::json!({
             "file": name,
             "tool": p.spec.id,
             "number": p.number,
@@ -975,9 +969,25 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
             "cut_length_mm": t.cut_length_mm,
             "rapid_length_mm": t.rapid_length_mm,
             "time_min": t.time_min,
-            "plunges": t.plunges,
-            "rest_after": {"max_thickness_mm": rest_max, "volume_mm3": rest_vol, "picture": pic},
-        }));
+        });
+        // the simulator's figures, as `rough`'s report names them: gouges, rapid collisions,
+        // plunges, the rest after the program (without a replay, the plunges it marks)
+        entry["simulated"] = serde_json::Value::Bool(p.check.is_some());
+        match &p.check {
+            Some(c) => {
+                let v = serde_json::to_value(c).map_err(|e| Failure { user: false, msg: e.to_string() })?;
+                if let (Some(obj), Some(v)) = (entry.as_object_mut(), v.as_object()) {
+                    obj.extend(v.iter().map(|(k, v)| (k.clone(), v.clone())));
+                }
+            }
+            None => entry["plunges"] = t.plunges.into(),
+        }
+        if let (Some(rest), false) = (&sp.rest, a.no_pictures) {
+            let pname = format!("{stem}_rest.png");
+            files.push((a.output_dir.join(&pname), rest.png(i)?));
+            entry["rest_picture"] = serde_json::Value::String(pname);
+        }
+        programs.push(entry);
     }
     let report = serde_json::json!({
         "input": input_name,
@@ -1003,6 +1013,7 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
         "compute_s": compute_s,
         "prepare_s": sp.prepare_s,
         "search_s": sp.search_s,
+        "simulate_s": sp.simulate_s,
         "sequences": sp.sequences,
     });
     let json = serde_json::to_string_pretty(&report).map_err(|e| Failure { user: false, msg: e.to_string() })?;
@@ -1024,6 +1035,18 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
             sp.evaluations,
             compute_s
         );
+        if let Some(last) = sp.programs.last().and_then(|p| p.check.as_ref()) {
+            let checks: Vec<_> = sp.programs.iter().filter_map(|p| p.check.as_ref()).collect();
+            println!(
+                "replayed: {} gouges, {} rapid collisions, {} plunges; rest after the last tool {:.0} mm³ ({:.2} % of what it reaches), {:.2} s",
+                checks.iter().map(|c| c.gouges).sum::<usize>(),
+                checks.iter().map(|c| c.rapid_collisions).sum::<usize>(),
+                checks.iter().map(|c| c.plunges).sum::<usize>(),
+                last.rest_volume_mm3,
+                100.0 * last.rest_fraction,
+                sp.simulate_s
+            );
+        }
         println!(
             "wrote {} programs into {} and the report {}",
             sp.programs.len(),

@@ -1,11 +1,12 @@
 //! [`EdgeIndex`]: a uniform grid over line segments for fast "how close is the nearest edge"
-//! questions — the gouge test of a tool centre against the part, the clearance of a link.
+//! questions — the gouge test of a tool centre against the part, the clearance of a link; and
+//! [`InsideIndex`]: "is this point in the area" for many points against one large area.
 //!
 //! A uniform grid suits CAM geometry (edges of similar size spread over the stock) better than
 //! a tree, and it is ten lines of code; each edge is listed in every cell its bounding box
 //! touches (compressed-row storage).
 
-use super::{DVec2, dist_point_segment, dist_segment_segment};
+use super::{Area, DVec2, closest_param, dist_point_segment, dist_segment_segment};
 
 /// Segments bucketed in a uniform grid.
 #[derive(Debug, Clone)]
@@ -145,6 +146,20 @@ impl EdgeIndex {
         best
     }
 
+    /// The nearest point of the edges to `p` and its distance, when one is closer than `max`.
+    pub fn nearest(&self, p: DVec2, max: f64) -> Option<(DVec2, f64)> {
+        let mut best: Option<(DVec2, f64)> = None;
+        let m = DVec2::splat(max);
+        self.for_each_near(p - m, p + m, |_, a, b| {
+            let q = a + (b - a) * closest_param(p, a, b);
+            let d = (q - p).length();
+            if d < best.map_or(max, |b| b.1) {
+                best = Some((q, d));
+            }
+        });
+        best
+    }
+
     /// Distance from segment `a`–`b` to the nearest edge, or `max` when none is closer.
     pub fn segment_distance(&self, a: DVec2, b: DVec2, max: f64) -> f64 {
         let mut best = max;
@@ -156,6 +171,59 @@ impl EdgeIndex {
             }
         });
         best
+    }
+}
+
+/// Point-in-area by even–odd crossings, with the edges bucketed in horizontal bands so that a
+/// query reads only the edges of its band: for many queries against an area of many vertices
+/// ([`super::Area::contains`] reads every edge).
+#[derive(Debug, Clone)]
+pub struct InsideIndex {
+    y0: f64,
+    h: f64,
+    bands: Vec<Vec<(DVec2, DVec2)>>,
+}
+
+impl InsideIndex {
+    /// Indexes the rings of `area` in about one band per eight vertices (at most 4096).
+    pub fn new(area: &Area) -> InsideIndex {
+        let Some((lo, hi)) = area.bounds() else { return InsideIndex { y0: 0.0, h: 1.0, bands: Vec::new() } };
+        let n = ((area.vertex_count() / 8).clamp(1, 4096)) as f64;
+        let h = ((hi.y - lo.y) / n).max(1e-3);
+        let nb = ((hi.y - lo.y) / h).floor() as usize + 1;
+        let mut bands = vec![Vec::new(); nb];
+        for ring in area.rings() {
+            for i in 0..ring.len() {
+                let (a, b) = (ring[i], ring[(i + 1) % ring.len()]);
+                if a.y == b.y {
+                    continue;
+                }
+                let j0 = (((a.y.min(b.y) - lo.y) / h).floor().max(0.0) as usize).min(nb - 1);
+                let j1 = (((a.y.max(b.y) - lo.y) / h).floor().max(0.0) as usize).min(nb - 1);
+                for band in &mut bands[j0..=j1] {
+                    band.push((a, b));
+                }
+            }
+        }
+        InsideIndex { y0: lo.y, h, bands }
+    }
+
+    /// True when `p` is inside the area (even–odd; a point on an edge falls either way).
+    pub fn contains(&self, p: DVec2) -> bool {
+        let f = (p.y - self.y0) / self.h;
+        if f.is_nan() || f < 0.0 || f as usize >= self.bands.len() {
+            return false;
+        }
+        let mut inside = false;
+        for &(a, b) in &self.bands[f as usize] {
+            if (a.y > p.y) != (b.y > p.y) {
+                let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
+                if p.x < x {
+                    inside = !inside;
+                }
+            }
+        }
+        inside
     }
 }
 
@@ -185,6 +253,32 @@ mod tests {
             let q = p + DVec2::new(rnd() / 10.0 - 5.0, rnd() / 10.0 - 5.0);
             let brute2 = edges.iter().map(|(a, b)| dist_segment_segment(p, q, *a, *b)).fold(f64::INFINITY, f64::min);
             assert!((idx.segment_distance(p, q, 8.0) - brute2.min(8.0)).abs() < 1e-12);
+            match idx.nearest(p, 8.0) {
+                Some((at, d)) => {
+                    assert!((d - brute).abs() < 1e-12 && (at - p).length() - d < 1e-12);
+                    assert!(edges.iter().any(|(a, b)| dist_point_segment(at, *a, *b) < 1e-9));
+                }
+                None => assert!(brute >= 8.0),
+            }
         }
+    }
+
+    #[test]
+    fn inside_matches_the_area() {
+        // a square with a square hole and, beside it, a rectangle with round corners (slanted
+        // edges)
+        let mut a = Area::rect(0.0, 0.0, 40.0, 40.0).difference(&Area::rect(10.0, 10.0, 30.0, 30.0));
+        a = a.union(&Area::rect(55.0, 5.0, 75.0, 30.0).offset(4.0, 0.01));
+        let idx = InsideIndex::new(&a);
+        let mut s: u64 = 777;
+        let mut rnd = || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64) * 100.0 - 10.0
+        };
+        for _ in 0..2000 {
+            let p = DVec2::new(rnd(), rnd());
+            assert_eq!(idx.contains(p), a.contains(p), "{p:?}");
+        }
+        assert!(!InsideIndex::new(&Area::empty()).contains(DVec2::ZERO));
     }
 }

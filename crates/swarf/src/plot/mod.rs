@@ -1,7 +1,8 @@
 //! Pictures like the papers' figures: on the left the XY path coloured by tool engagement over
 //! the part (dark) and the stock outline, rapids dotted, plunges and gouges marked; on the right
 //! engagement against cutting length with the reference and the bound. Written as SVG, and as
-//! PNG by rendering that SVG with resvg.
+//! PNG by rendering that SVG with resvg. [`heights`] draws the stock seen from above from a
+//! simulator's heights.
 
 use crate::error::{Error, Result};
 use crate::geom::{Area, DVec2};
@@ -9,6 +10,7 @@ use crate::sim::{Replay, SampleKind};
 use crate::toolpath::{Motion, Toolpath};
 use std::fmt::Write;
 
+pub mod heights;
 pub mod shape;
 
 /// What to draw.

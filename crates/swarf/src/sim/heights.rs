@@ -9,7 +9,7 @@ use super::replay::Rest;
 use super::{HeightMap, SimOptions};
 use crate::error::Result;
 use crate::geom::mesh::Mesh;
-use crate::model::MeshJob;
+use crate::model::{MeshJob, Tool};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -73,15 +73,35 @@ pub fn height_map(mesh: &Mesh, grid: &Grid) -> Vec<f32> {
 /// The material model of a whole mesh job: the stock box, with the part's surface from the
 /// mesh (raised by the floor allowance) as what must stay.
 pub(crate) fn mesh_model(job: &MeshJob, sim: &SimOptions) -> Result<RasterSim> {
-    let mj = job.model_job();
-    let regions = mj.regions(job.radius(), 0.0)?;
+    mesh_model_after(job, &job.cutting.tool, None, sim)
+}
+
+/// The material model of a whole mesh job for `tool` (the job's own tool in [`mesh_model`]),
+/// its stock what an earlier model left: the heights of `after` where a cell's centre falls in
+/// its grid (cells of grids of one size aligned to the stock's corner coincide), the stock box
+/// elsewhere or when there is none. A sequence of programs with tools of their own is replayed
+/// on one stock this way, each on what the ones before it left.
+pub(crate) fn mesh_model_after(
+    job: &MeshJob,
+    tool: &Tool,
+    after: Option<&HeightMap>,
+    sim: &SimOptions,
+) -> Result<RasterSim> {
+    let mut mj = job.model_job();
+    mj.cutting.tool = tool.clone();
+    let regions = mj.regions(mj.radius(), 0.0)?;
     let grid = RasterSim::grid_for(&mj, &regions.keep, sim)?;
     let mut part = height_map(&job.mesh, &grid);
     let lift = job.allowance_floor as f32;
     for h in &mut part {
         *h += lift;
     }
-    let stock = vec![f32::INFINITY; grid.len()];
+    let stock = match after {
+        None => vec![f32::INFINITY; grid.len()],
+        Some(a) => (0..grid.len())
+            .map(|k| a.cell(grid.center(k % grid.nx, k / grid.nx)).map_or(f32::INFINITY, |c| a.stock[c]))
+            .collect(),
+    };
     let opts = SimOptions { heights: Some(Arc::new(HeightMap { grid, stock, part: Some(part) })), ..sim.clone() };
     RasterSim::new(&mj, &regions, &opts)
 }
@@ -91,8 +111,23 @@ pub(crate) fn mesh_model(job: &MeshJob, sim: &SimOptions) -> Result<RasterSim> {
 /// closing of the part's heights by the tool's disk), counted where it is thicker than the
 /// simulation's tolerance.
 pub(crate) fn mesh_rest(job: &MeshJob, sim: &RasterSim) -> Rest {
-    let g = sim.grid;
-    let part = sim.part_heights();
+    rest_above(job, sim, &reach(job, &sim.grid, sim.part_heights(), job.radius()))
+}
+
+/// The lowest height a flat end mill of radius `radius` reaches at each cell of `grid` without
+/// touching the part (read from the mesh, raised by the floor allowance) or going below the
+/// floor, row-major: what [`mesh_rest`] measures the stock against, for any tool and on any
+/// grid (a model's own, or a larger one whose cells it shares).
+pub(crate) fn mesh_reach(job: &MeshJob, grid: &Grid, radius: f64) -> Vec<f32> {
+    let lift = job.allowance_floor as f32;
+    let part: Vec<f32> = height_map(&job.mesh, grid).into_iter().map(|h| h + lift).collect();
+    reach(job, grid, &part, radius)
+}
+
+/// The grey closing of the part's heights `part` on `grid` by the disk of radius `radius`, never
+/// below the part itself or the floor.
+fn reach(job: &MeshJob, grid: &Grid, part: &[f32], radius: f64) -> Vec<f32> {
+    let g = *grid;
     let floor = (job.floor + job.allowance_floor) as f32;
     let p: Vec<f32> = part.iter().map(|&h| h.max(floor)).collect();
     // the sideways allowance: the part's heights spread over a disk of its radius (a cylinder
@@ -101,11 +136,19 @@ pub(crate) fn mesh_rest(job: &MeshJob, sim: &RasterSim) -> Rest {
     // (the tool's axis kept R + res/√2 from the part's cell centres, as a path running exactly
     // at R from the true surface may be that far from the nearest centre: no phantom slivers
     // along walls; slivers thinner than that go unreported)
-    let rc = job.radius() / g.res + std::f64::consts::FRAC_1_SQRT_2;
+    let rc = radius / g.res + std::f64::consts::FRAC_1_SQRT_2;
     // tool tip height at each centre: the highest part under the disk (dilation), then the
     // lowest of those over the disks that cover a cell (erosion)
     let tip = disk_filter(&p, g.nx, g.ny, rc, true);
-    let reach = disk_filter(&tip, g.nx, g.ny, job.radius() / g.res, false);
+    let reach = disk_filter(&tip, g.nx, g.ny, radius / g.res, false);
+    reach.iter().zip(&p).map(|(r, p)| r.max(*p)).collect()
+}
+
+/// The rest material of `sim`'s stock above `low` (the heights of [`mesh_reach`] on `sim`'s
+/// grid): the stock standing more than the simulation's tolerance above it inside the stock box,
+/// where `low` is below the stock top (the area the tool reaches).
+pub(crate) fn rest_above(job: &MeshJob, sim: &RasterSim, low: &[f32]) -> Rest {
+    let g = sim.grid;
     let s = sim.heights();
     let (slo, shi) = (job.stock_lo, job.stock_hi);
     let cell = g.res * g.res;
@@ -118,15 +161,14 @@ pub(crate) fn mesh_rest(job: &MeshJob, sim: &RasterSim) -> Rest {
                 continue;
             }
             let k = j * g.nx + i;
-            let low = reach[k].max(p[k]);
-            if low >= shi.z as f32 - tol {
+            if low[k] >= shi.z as f32 - tol {
                 continue;
             }
             r.reachable_mm2 += cell;
-            let t = s[k] - low;
+            let t = s[k] - low[k];
             if t > tol {
                 if t > 0.5 {
-                    log::trace!("rest {t:.3} mm at {c:?} (stock {:.3}, reach {:.3}, part {:.3})", s[k], reach[k], p[k]);
+                    log::trace!("rest {t:.3} mm at {c:?} (stock {:.3}, reach {:.3})", s[k], low[k]);
                 }
                 r.area_mm2 += cell;
                 r.volume_mm3 += t as f64 * cell;

@@ -217,6 +217,8 @@ fn bad_mesh_jobs_and_tool_sequences_name_their_setting() {
     let plan = |what: &str, o: &SeqOptions| setting(what, swarf::job::toolseq::plan(&mesh_job(), &db, o).map(|_| ()));
     assert_eq!(plan("ramp 0°", &SeqOptions { ramp_deg: 0.0, ..SeqOptions::DEFAULT }), Setting::SeqRampAngle);
     assert_eq!(plan("clearance −2", &SeqOptions { clearance: -2.0, ..SeqOptions::DEFAULT }), Setting::SeqClearance);
+    let sdf = SeqOptions { sim: SimOptions { engine: SimEngine::Sdf, ..SimOptions::DEFAULT }, ..SeqOptions::DEFAULT };
+    assert_eq!(plan("the replay on distance fields", &sdf), Setting::SimEngine);
 }
 
 #[test]

@@ -6,7 +6,7 @@
 //! Checks: the search (shared work, bound) returns the brute-force optimum, each sequence's
 //! cost is what costing it alone gives, every candidate is costed without the bound, and the
 //! chosen programs neither plunge nor gouge the part (the tool disk against the mesh's heights,
-//! independently of the planner).
+//! independently of the planner, and the simulator's replay of each).
 
 use swarf::geom::mesh::Mesh;
 use swarf::geom::{DVec2, DVec3};
@@ -184,22 +184,32 @@ fn programs_neither_plunge_nor_gouge() {
         }
     }
     assert!(cut_total > 100.0);
-    // the stock after the last tool: nothing thicker than its depth of cut above the part where
-    // the smallest tool reaches (its accessible area: away from the walls by the picture's cell)
-    let rest = &plan.rest;
+    // the simulator's replay of each program, on what the ones before it left, agrees
+    for p in &plan.programs {
+        let c = p.check.as_ref().expect("replayed");
+        assert_eq!((c.gouges, c.rapid_collisions, c.plunges), (0, 0, 0), "{}: {c:?}", p.spec.id);
+    }
+    // the simulated stock after the last tool: nothing thicker than its depth of cut above the
+    // part where the smallest tool reaches (away from the walls by a cell), as the replay says
+    let rest = plan.rest.as_ref().expect("replayed");
     let last = plan.programs.last().expect("a program");
-    let worst = rest_in_reach(rest, last.toolpath.tool.radius());
+    let part: Vec<f32> =
+        swarf::sim::heights::height_map(&job.mesh, &rest.grid).into_iter().map(|h| h.max(rest.bottom as f32)).collect();
+    let worst = rest_in_reach(rest, &part, last.toolpath.tool.radius());
     assert!(worst <= last.spec.depth_of_cut + 0.1, "rest {worst} mm where the last tool reaches");
-    // (and the corners no round tool reaches are left: there is rest)
-    let (max, _) = rest.rest(rest.after.len() - 1, 0.05);
+    let thick = last.check.as_ref().expect("replayed").rest_max_thickness_mm;
+    assert!(thick <= last.spec.depth_of_cut + 0.1, "the replay's rest: {thick} mm");
+    // (and the corners no round tool reaches are left: there is rest above the part)
+    let after = rest.after.last().expect("a program");
+    let max = after.iter().zip(&part).map(|(s, p)| f64::from(s - p)).fold(0.0, f64::max);
     assert!(max > last.spec.depth_of_cut + 1.0, "{max}");
     assert!(rest.png(0).unwrap().starts_with(b"\x89PNG"));
 }
 
 /// The thickest stock left above the lowest height a flat tool of radius `r` reaches (the
-/// grey closing of the part's heights by its disk, grown by a cell to be fair to the raster),
-/// over every third cell of the rest map.
-fn rest_in_reach(rest: &swarf::job::toolseq::RestMaps, r: f64) -> f64 {
+/// grey closing of the part's heights `part` by its disk, grown by a cell to be fair to the
+/// raster), over every third cell of the rest map.
+fn rest_in_reach(rest: &swarf::job::toolseq::RestMaps, part: &[f32], r: f64) -> f64 {
     let g = rest.grid;
     let rc = (r / g.res).ceil() as i64 + 1;
     let disk: Vec<(i64, i64)> = (-rc..=rc)
@@ -212,7 +222,7 @@ fn rest_in_reach(rest: &swarf::job::toolseq::RestMaps, r: f64) -> f64 {
     // tool tip at each centre: the highest part under the disk
     let tip: Vec<f32> = (0..g.ny as i64)
         .flat_map(|j| (0..g.nx as i64).map(move |i| (i, j)))
-        .map(|(i, j)| disk.iter().filter_map(|(di, dj)| at(&rest.part, i + di, j + dj)).fold(f32::MIN, f32::max))
+        .map(|(i, j)| disk.iter().filter_map(|(di, dj)| at(part, i + di, j + dj)).fold(f32::MIN, f32::max))
         .collect();
     let last = rest.after.last().expect("a tool");
     let mut worst = 0.0f64;
@@ -220,7 +230,7 @@ fn rest_in_reach(rest: &swarf::job::toolseq::RestMaps, r: f64) -> f64 {
         for i in (0..g.nx as i64).step_by(3) {
             let reach = disk.iter().filter_map(|(di, dj)| at(&tip, i + di, j + dj)).fold(f32::MAX, f32::min);
             let k = j as usize * g.nx + i as usize;
-            let low = reach.max(rest.part[k]);
+            let low = reach.max(part[k]);
             if low >= rest.top as f32 - 0.01 {
                 continue;
             }

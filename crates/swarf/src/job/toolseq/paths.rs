@@ -1,227 +1,18 @@
-//! The cost-optimal tool sequence for z-level roughing of a mesh part (paper 3, El-Midany et
-//! al.: §2 eqs. 1–4, §3 Algorithms 1–2, §4 Algorithms 3–4, §6 Tables 1–3).
-//!
-//! A sequence is a set of tools of the database cut biggest first (eq. 1: `x ⊆ T`); it always
-//! ends with the smallest tool, which sets what the sequence can reach (every row of the
-//! paper's Table 2 ends with it). Each tool cuts its own hunting planes (levels every
-//! `depth_of_cut` from the stock top to the floor, plus the part's flats, as
-//! [`crate::model::MeshJob::levels`]).
-//!
-//! **Per tool, once** (whatever the sequence): at each level, the region of tool centres `C`
-//! (the stock minus the part's shadow above the level grown by the tool radius), its
-//! contour-parallel path (Algorithm 1: `C`, `C ⊖ ae`, `C ⊖ 2ae`, … until empty, cut from the
-//! inside out, nested loops joined by a straight step where it stays inside `C`), and the area
-//! the tool clears there, its accessible area `A = C ⊕ r` (Algorithm 2). The width of cut is
-//! capped at the radius (Table 1's is exactly the radius): then every point of `C` is within
-//! `ae ≤ r` of a loop, so the loops leave nothing of `A` uncut and `A` is what the level clears.
-//!
-//! **Per tool and prefix** (the tools before it in the sequence), Algorithm 4: the material
-//! left at a level `z` is the stock minus the part and minus, for each earlier tool, its
-//! accessible area at its highest level at or below `z` (its levels above cleared a superset,
-//! its levels below clear nothing above `z`). The tool's own path is trimmed to where its disk
-//! (grown by [`NEED_MARGIN`]) meets that material — the paper's `TrimTPC(offset(A₁, −r), TPC)`
-//! written for several earlier tools with their own levels. A trimmed piece starts and ends
-//! where the disk is in air, so the tool goes down there without plunging into material; a
-//! path that starts in material (the first tool, or a region no earlier tool reached) ramps
-//! down along its first loop. Between pieces the tool either feeds on along its path through
-//! the cleared air or retracts and rapids, whichever is quicker.
-//!
-//! Algorithm 3 (the traditional decomposition) is kept for comparison
-//! ([`Decomposition::Regions`]): the rest region `Z = C ∩ (material ⊕ r)` gets its own
-//! contour-parallel path (offsets recomputed for every prefix) instead of a trimmed one.
-//!
-//! **The search** is exact: the prefix tree of the tools, biggest first, is walked depth-first;
-//! every node costs one tool given the tools before it (each such cost is computed once and
-//! shared by every sequence through that node), and a subtree is cut off when its cost so far
-//! plus a lower bound of the last tool's cost is already above the best complete sequence. The
-//! bound is the last tool's cutting time on the material that even every other tool would leave
-//! (what must be cut at the least, as the material of a smaller prefix contains it) plus its
-//! tool change. The time and cost of a tool are those of the program that is written (eq. 3's
-//! `l_mc` is every feed move, `l_air` every rapid).
+//! Each tool's own paths (paper 3 §3 Algorithm 1, §4 Algorithms 3–4): its levels, regions of
+//! tool centres and contour-parallel loops, prepared once whatever the sequence, and the
+//! program of a tool given the tools before it — its loops trimmed to the material they left
+//! (or, for Algorithm 3, new loops over the rest region), emitted with its own entries and
+//! links. See the module [`super`] for why the search keeps these paths and this emitter.
 
-use crate::error::{Error, Result, Setting};
+use super::{Decomposition, MAX_TOOLS, SeqOptions};
+use crate::error::{Error, Result};
+use crate::geom::index::{EdgeIndex, InsideIndex};
 use crate::geom::{Area, DVec2, DVec3, segments_intersect};
-use crate::model::tooldb::{Cost, ToolDb, ToolRun, ToolSpec};
+use crate::model::tooldb::{ToolDb, ToolRun, ToolSpec};
 use crate::model::{MeshJob, REGION_TOL, Tool};
 use crate::toolpath::{MoveKind, Toolpath};
 use rayon::prelude::*;
-use std::collections::HashMap;
 use std::time::Instant;
-
-/// How a later tool is confined to what the earlier tools left (paper 3 §4).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Decomposition {
-    /// Algorithm 4: the tool's own path, trimmed to where it meets material.
-    Trim,
-    /// Algorithm 3: a new contour-parallel path over the rest region.
-    Regions,
-}
-
-/// Options of the search.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SeqOptions {
-    /// Cavity decomposition.
-    pub decomposition: Decomposition,
-    /// Cut off subtrees by the lower bound (off: cost every candidate sequence).
-    pub prune: bool,
-    /// Largest ramp angle of an entry, degrees.
-    pub ramp_deg: f64,
-    /// Clearance plane above the stock top (or the part, when higher), mm.
-    pub clearance: f64,
-}
-
-impl SeqOptions {
-    /// Algorithm 4 (trimmed paths), the bounded search, 3° ramps, a clearance plane 2 mm above
-    /// the job.
-    pub const DEFAULT: SeqOptions =
-        SeqOptions { decomposition: Decomposition::Trim, prune: true, ramp_deg: 3.0, clearance: 2.0 };
-
-    /// Checks the ramp angle (in (0°, 90°)) and the clearance (zero or more).
-    pub fn validate(&self) -> Result<()> {
-        if !(self.ramp_deg.is_finite() && self.ramp_deg > 0.0 && self.ramp_deg < 90.0) {
-            return Err(Error::setting(
-                Setting::SeqRampAngle,
-                format!("{}°: must be between 0° and 90°", self.ramp_deg),
-            ));
-        }
-        if !(self.clearance.is_finite() && self.clearance >= 0.0) {
-            return Err(Error::setting(
-                Setting::SeqClearance,
-                format!("{} mm: must be zero or positive", self.clearance),
-            ));
-        }
-        Ok(())
-    }
-}
-
-impl Default for SeqOptions {
-    fn default() -> Self {
-        SeqOptions::DEFAULT
-    }
-}
-
-/// One costed sequence.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct Sequence {
-    /// Tool ids, in cutting order.
-    pub tools: Vec<String>,
-    /// Their diameters, mm.
-    pub diameters: Vec<f64>,
-    /// Each tool's path lengths.
-    #[serde(skip)]
-    pub runs: Vec<ToolRun>,
-    /// Time and cost (eqs. 2–4).
-    #[serde(flatten)]
-    pub cost: Cost,
-    /// Indices of the tools in the database.
-    #[serde(skip)]
-    pub index: Vec<usize>,
-}
-
-/// One program of the chosen sequence.
-#[derive(Debug, Clone)]
-pub struct Program {
-    /// The tool.
-    pub spec: ToolSpec,
-    /// Its number in the database (1-based), written as `T`.
-    pub number: u32,
-    /// The path.
-    pub toolpath: Toolpath,
-    /// Its lengths and feed.
-    pub run: ToolRun,
-}
-
-/// The outcome of a search.
-#[derive(Debug, Clone)]
-pub struct SeqPlan {
-    /// Every sequence costed, cheapest first.
-    pub sequences: Vec<Sequence>,
-    /// Candidates (every subset of the bigger tools, followed by the smallest).
-    pub candidates: usize,
-    /// Tool-given-prefix evaluations made.
-    pub evaluations: usize,
-    /// The programs of the cheapest sequence, in order.
-    pub programs: Vec<Program>,
-    /// The stock after each tool of the cheapest sequence (paper 3, Fig. 11).
-    pub rest: RestMaps,
-    /// Seconds spent on the tools' own geometry (levels, shadows, regions, loops).
-    pub prepare_s: f64,
-    /// Seconds spent on the search.
-    pub search_s: f64,
-}
-
-/// Height maps of the stock after each tool of a sequence, over a grid of the stock box.
-#[derive(Debug, Clone)]
-pub struct RestMaps {
-    /// The grid.
-    pub grid: crate::sim::grid::Grid,
-    /// The part's surface at each cell (the floor where there is no part).
-    pub part: Vec<f32>,
-    /// The stock's top after each tool, in order.
-    pub after: Vec<Vec<f32>>,
-    /// Stock top and bottom.
-    pub top: f64,
-    /// Lowest height of the job.
-    pub bottom: f64,
-}
-
-impl RestMaps {
-    /// Rest after tool `i`: (largest thickness above the part, volume mm³), counted where the
-    /// stock stands more than `tol` above the part.
-    pub fn rest(&self, i: usize, tol: f64) -> (f64, f64) {
-        let cell = self.grid.res * self.grid.res;
-        let mut max = 0.0f64;
-        let mut vol = 0.0;
-        for (s, p) in self.after[i].iter().zip(&self.part) {
-            let t = f64::from(s - p);
-            if t > tol {
-                max = max.max(t);
-                vol += t * cell;
-            }
-        }
-        (max, vol)
-    }
-
-    /// A picture of the stock after tool `i` seen from above: grey by height (dark is deep),
-    /// orange where stock stands above the part, the stronger the thicker.
-    pub fn png(&self, i: usize) -> Result<Vec<u8>> {
-        let g = self.grid;
-        let (w, h) = (g.nx as u32, g.ny as u32);
-        let mut pix = resvg::tiny_skia::Pixmap::new(w.max(1), h.max(1))
-            .ok_or_else(|| Error::Output { what: "picture".into(), reason: "it is empty".into() })?;
-        let span = (self.top - self.bottom).max(1e-9);
-        let data = pix.data_mut();
-        for j in 0..g.ny {
-            for ii in 0..g.nx {
-                let k = j * g.nx + ii;
-                let s = f64::from(self.after[i][k]);
-                let t = (s - f64::from(self.part[k])).max(0.0);
-                let v = 60.0 + 180.0 * ((s - self.bottom) / span).clamp(0.0, 1.0);
-                let a = if t > 0.05 { (0.35 + 0.65 * (t / 5.0).min(1.0)).min(1.0) } else { 0.0 };
-                let (r, gg, b) = (v + (255.0 - v) * a, v + (140.0 - v) * a, v * (1.0 - a));
-                // image rows top down: y up in the grid
-                let o = ((g.ny - 1 - j) * g.nx + ii) * 4;
-                data[o] = r.round() as u8;
-                data[o + 1] = gg.round() as u8;
-                data[o + 2] = b.round() as u8;
-                data[o + 3] = 255;
-            }
-        }
-        pix.encode_png()
-            .map_err(|e| Error::Output { what: "picture".into(), reason: format!("cannot encode the PNG: {e}") })
-    }
-}
-
-impl SeqPlan {
-    /// The cheapest sequence.
-    pub fn best(&self) -> &Sequence {
-        &self.sequences[0]
-    }
-}
-
-/// Most tools a search takes (2^(n−1) candidate sequences).
-pub const MAX_TOOLS: usize = 20;
 
 /// Points of a path are this far apart at most when trimmed (mm).
 const SAMPLE: f64 = 0.5;
@@ -233,9 +24,9 @@ pub const NEED_MARGIN: f64 = 0.05;
 const WALL_MARGIN: f64 = 0.005;
 /// Material thinner than this above a level is taken as cleared (mm): levels of two tools this
 /// close are one.
-const Z_TOL: f64 = 0.05;
+pub(super) const Z_TOL: f64 = 0.05;
 /// Rest areas smaller than this are dropped (mm²).
-const SLIVER: f64 = 1e-3;
+pub(super) const SLIVER: f64 = 1e-3;
 /// Ramps start this far above the level above (mm).
 const RAMP_CLEAR: f64 = 0.05;
 /// Tool centres stay this much less than the radius outside the stock (mm).
@@ -255,19 +46,19 @@ struct Chain {
 
 /// One level of one tool.
 #[derive(Debug, Clone)]
-struct Level {
-    z: f64,
+pub(super) struct Level {
+    pub(super) z: f64,
     /// The level above it for this tool (or the stock top): what the tool's own earlier levels
     /// cleared.
     above: f64,
     /// Tool centres.
     centres: Area,
     /// What the tool clears at this level (Algorithm 2).
-    access: Area,
+    pub(super) access: Area,
     /// Its full contour-parallel path (Algorithm 1).
     chains: Vec<Chain>,
     /// Index of its height among every tool's levels.
-    zi: usize,
+    pub(super) zi: usize,
     /// Where the tool may travel just above the level above (its centres, grown by 4 µm: the
     /// tool cleared everything over them down to that level), when the level above is cut.
     over: Option<Area>,
@@ -275,266 +66,31 @@ struct Level {
 
 /// A tool with its levels.
 #[derive(Debug, Clone)]
-struct ToolGeom {
-    spec: ToolSpec,
-    number: u32,
-    levels: Vec<Level>,
+pub(super) struct ToolGeom {
+    pub(super) spec: ToolSpec,
+    pub(super) number: u32,
+    pub(super) levels: Vec<Level>,
 }
 
 /// Everything that does not depend on the sequence.
-struct Prepared {
-    tools: Vec<ToolGeom>,
+pub(super) struct Prepared {
+    pub(super) tools: Vec<ToolGeom>,
     /// Every tool's levels, top down.
-    zs: Vec<f64>,
+    pub(super) zs: Vec<f64>,
     /// At each of them, the part's keep grown a little (the band no tool enters counts as
     /// cleared).
-    bands: Vec<Area>,
-    stock: Area,
+    pub(super) bands: Vec<Area>,
+    /// Their edges (where a piece goes down, [`Emitter::descend`]).
+    band_edges: Vec<EdgeIndex>,
+    pub(super) stock: Area,
     top: f64,
     clear_z: f64,
-    machine: crate::model::tooldb::Machine,
+    pub(super) machine: crate::model::tooldb::Machine,
     opts: SeqOptions,
 }
 
-/// Finds the cheapest tool sequence for `job` with the tools of `db` (the job's own tool,
-/// step-down and feed are not used), and the programs of that sequence.
-///
-/// ```
-/// use swarf::model::tooldb::ToolDb;
-/// use swarf::{Input, Overrides, SeqOptions, load_input, plan_tools};
-/// let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
-/// let case = format!("{root}/examples/3d/bowl_cavity.json");
-/// let Input::Mesh(job) = load_input(case.as_ref(), &Overrides::DEFAULT)? else { unreachable!() };
-/// let db = ToolDb::read(format!("{root}/examples/tools/table1.json").as_ref())?;
-/// let plan = plan_tools(&job, &db, &SeqOptions::DEFAULT)?;
-/// let best = plan.best();
-/// // one program per tool of the cheapest sequence, biggest first
-/// assert_eq!(plan.programs.len(), best.tools.len());
-/// assert!(best.diameters.windows(2).all(|w| w[0] >= w[1]));
-/// # Ok::<(), swarf::Error>(())
-/// ```
-pub fn plan(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<SeqPlan> {
-    let t0 = Instant::now();
-    let prep = prepare(job, db, opts)?;
-    let prepare_s = t0.elapsed().as_secs_f64();
-    log::info!("{} tools prepared in {prepare_s:.2} s", prep.tools.len());
-    let t1 = Instant::now();
-    let mut search =
-        Search { prep: &prep, memo: HashMap::new(), mats: Materials::default(), done: Vec::new(), best: f64::INFINITY };
-    let n = prep.tools.len();
-    let last = n - 1;
-    // the least the last tool must cut, whatever comes before it
-    let all: Vec<usize> = (0..last).collect();
-    let bound = if opts.prune && opts.decomposition == Decomposition::Trim {
-        let need = search.eval(last, &all).need_mm;
-        let spec = &prep.tools[last].spec;
-        Some(ToolRun {
-            cut_mm: need,
-            air_mm: 0.0,
-            feed_mm_min: spec.feed_mm_min(),
-            price: spec.price,
-            life_min: spec.life_min,
-        })
-    } else {
-        None
-    };
-    search.walk(&mut Vec::new(), &mut Vec::new(), bound.as_ref());
-    let evaluations = search.memo.len();
-    let mut sequences = search.done;
-    sequences.sort_by(|a, b| a.cost.total_cost.total_cmp(&b.cost.total_cost).then_with(|| a.index.cmp(&b.index)));
-    let best = sequences.first().ok_or_else(|| Error::job("tools", "no sequence could be costed"))?;
-    let programs = best
-        .index
-        .iter()
-        .enumerate()
-        .map(|(i, &k)| {
-            let mats = search.mats.of(&prep, &best.index[..i]);
-            let (toolpath, run, _) = run_tool(&prep, k, &best.index[..i], &mats);
-            Program { spec: prep.tools[k].spec.clone(), number: prep.tools[k].number, toolpath, run }
-        })
-        .collect();
-    let rest = rest_maps(job, &prep, &best.index);
-    Ok(SeqPlan {
-        sequences,
-        candidates: 1 << last,
-        evaluations,
-        programs,
-        rest,
-        prepare_s,
-        search_s: t1.elapsed().as_secs_f64(),
-    })
-}
-
-/// Costs one sequence on its own (no shared work, no bound): `seq` lists database indices,
-/// biggest tool first. For checking the search.
-pub fn cost_of(job: &MeshJob, db: &ToolDb, seq: &[usize], opts: &SeqOptions) -> Result<Cost> {
-    let prep = prepare(job, db, opts)?;
-    let order: Vec<usize> = seq
-        .iter()
-        .map(|&i| prep.tools.iter().position(|t| t.number as usize == i + 1))
-        .collect::<Option<_>>()
-        .ok_or_else(|| Error::job("tools", "a tool index is out of range"))?;
-    let mut mats = Materials::default();
-    let runs: Vec<ToolRun> = order
-        .iter()
-        .enumerate()
-        .map(|(i, &k)| run_tool(&prep, k, &order[..i], &mats.of(&prep, &order[..i])).1)
-        .collect();
-    Ok(prep.machine.cost(&runs))
-}
-
-/// The material left by a prefix at every level height, each the one before it minus the last
-/// tool's accessible area there (shared by every sequence through the prefix).
-#[derive(Default)]
-struct Materials {
-    memo: HashMap<Vec<usize>, std::sync::Arc<Vec<Area>>>,
-}
-
-impl Materials {
-    fn of(&mut self, prep: &Prepared, prefix: &[usize]) -> std::sync::Arc<Vec<Area>> {
-        if let Some(m) = self.memo.get(prefix) {
-            return m.clone();
-        }
-        // only the heights of the tools that can follow the prefix are read
-        let from = prefix.last().map_or(0, |&j| j + 1);
-        let mut wanted = vec![false; prep.zs.len()];
-        for t in &prep.tools[from..] {
-            for l in &t.levels {
-                wanted[l.zi] = true;
-            }
-        }
-        let m: Vec<Area> = match prefix.split_last() {
-            None => prep
-                .bands
-                .par_iter()
-                .zip(&wanted)
-                .map(|(b, &w)| if w { prep.stock.difference(b).without_slivers(SLIVER) } else { Area::empty() })
-                .collect(),
-            Some((&j, parent)) => {
-                let before = self.of(prep, parent);
-                let levels = &prep.tools[j].levels;
-                prep.zs
-                    .par_iter()
-                    .zip(before.par_iter())
-                    .zip(&wanted)
-                    .map(|((&z, m), &w)| {
-                        if !w || m.is_empty() {
-                            return Area::empty();
-                        }
-                        // the tool's highest level at or below z: its levels above cleared less
-                        // deep, its levels below nothing above z
-                        match levels.iter().find(|l| l.z <= z + Z_TOL) {
-                            Some(l) if boxes_overlap(m, &l.access) => m.difference(&l.access).without_slivers(SLIVER),
-                            _ => m.clone(),
-                        }
-                    })
-                    .collect()
-            }
-        };
-        let m = std::sync::Arc::new(m);
-        self.memo.insert(prefix.to_vec(), m.clone());
-        m
-    }
-}
-
-/// The result of one tool given its prefix.
-#[derive(Debug, Clone, Copy)]
-struct Eval {
-    run: ToolRun,
-    /// Length of path whose disk meets material (a lower bound of the cutting length).
-    need_mm: f64,
-}
-
-struct Search<'a> {
-    prep: &'a Prepared,
-    memo: HashMap<(usize, Vec<usize>), Eval>,
-    mats: Materials,
-    done: Vec<Sequence>,
-    best: f64,
-}
-
-impl Search<'_> {
-    fn eval(&mut self, k: usize, prefix: &[usize]) -> Eval {
-        if let Some(e) = self.memo.get(&(k, prefix.to_vec())) {
-            return *e;
-        }
-        let mats = self.mats.of(self.prep, prefix);
-        let (_, run, need_mm) = run_tool(self.prep, k, prefix, &mats);
-        let e = Eval { run, need_mm };
-        self.memo.insert((k, prefix.to_vec()), e);
-        e
-    }
-
-    /// Visits the node `prefix` (with its tools' runs): costs the sequence that ends it with the
-    /// last tool, then each child.
-    fn walk(&mut self, prefix: &mut Vec<usize>, runs: &mut Vec<ToolRun>, bound: Option<&ToolRun>) {
-        let n = self.prep.tools.len();
-        let last = n - 1;
-        let m = self.prep.machine.clone();
-        let e = self.eval(last, prefix);
-        let mut all = runs.clone();
-        all.push(e.run);
-        let cost = m.cost(&all);
-        self.best = self.best.min(cost.total_cost);
-        let mut index: Vec<usize> = prefix.clone();
-        index.push(last);
-        self.done.push(Sequence {
-            tools: index.iter().map(|&k| self.prep.tools[k].spec.id.clone()).collect(),
-            diameters: index.iter().map(|&k| self.prep.tools[k].spec.diameter).collect(),
-            runs: all,
-            cost,
-            index,
-        });
-        let from = prefix.last().map_or(0, |&k| k + 1);
-        for j in from..last {
-            let e = self.eval(j, prefix);
-            runs.push(e.run);
-            let prune = bound.is_some_and(|b| {
-                let mut lb = runs.clone();
-                lb.push(*b);
-                m.cost(&lb).total_cost > self.best * (1.0 + 1e-12)
-            });
-            if !prune {
-                prefix.push(j);
-                self.walk(prefix, runs, bound);
-                prefix.pop();
-            }
-            runs.pop();
-        }
-    }
-}
-
-/// The stock after each tool of `seq`: at every cell, the lowest level at which a tool so far
-/// cleared it (its accessible area there).
-fn rest_maps(job: &MeshJob, prep: &Prepared, seq: &[usize]) -> RestMaps {
-    let size = job.stock_hi - job.stock_lo;
-    let res = (size.x.max(size.y) / 500.0).max(0.05);
-    let lo = job.stock_lo.truncate();
-    let g = crate::sim::grid::Grid::covering(lo, job.stock_hi.truncate(), 0.0, res, lo);
-    let floor = (job.floor + job.allowance_floor) as f32;
-    let part: Vec<f32> = crate::sim::heights::height_map(&job.mesh, &g)
-        .into_iter()
-        .map(|h| (h + job.allowance_floor as f32).max(floor))
-        .collect();
-    let mut cur = vec![prep.top as f32; g.len()];
-    let mut after = Vec::new();
-    for &k in seq {
-        let masks: Vec<(f32, Vec<bool>)> =
-            prep.tools[k].levels.par_iter().map(|l| (l.z as f32, g.rasterize(&l.access))).collect();
-        for (z, m) in masks {
-            for (c, inside) in cur.iter_mut().zip(m) {
-                if inside {
-                    *c = c.min(z);
-                }
-            }
-        }
-        after.push(cur.clone());
-    }
-    RestMaps { grid: g, part, after, top: prep.top, bottom: f64::from(floor) }
-}
-
 /// Reads the levels, shadows, regions and loops of every tool.
-fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<Prepared> {
+pub(super) fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<Prepared> {
     job.validate()?;
     opts.validate()?;
     if db.tools.is_empty() {
@@ -579,6 +135,7 @@ fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<Prepared> {
         .collect();
     log::debug!("toolseq: {} levels, shadows in {:.2} s", zs.len(), t0.elapsed().as_secs_f64());
     let bands: Vec<Area> = keeps.par_iter().map(|k| k.offset(WALL_MARGIN + 0.03, REGION_TOL)).collect();
+    let band_edges: Vec<EdgeIndex> = bands.par_iter().map(|b| EdgeIndex::from_area(b, 1.0)).collect();
     let stock = job.stock_area();
     let keep_at = |z: f64| zs.iter().position(|&w| w == z).expect("a level of some tool");
     let pairs: Vec<(usize, usize)> =
@@ -631,6 +188,7 @@ fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<Prepared> {
         tools,
         zs,
         bands,
+        band_edges,
         stock,
         top: job.stock_hi.z,
         clear_z: job.top() + opts.clearance,
@@ -809,55 +367,6 @@ fn nearest_index(it: impl Iterator<Item = f64>) -> usize {
     it.enumerate().min_by(|a, b| a.1.total_cmp(&b.1)).map_or(0, |(i, _)| i)
 }
 
-/// Point-in-area by even–odd crossings, with the edges bucketed in horizontal bands so that a
-/// query reads only the edges of its band.
-struct Inside {
-    y0: f64,
-    h: f64,
-    bands: Vec<Vec<(DVec2, DVec2)>>,
-}
-
-impl Inside {
-    fn new(area: &Area) -> Inside {
-        let Some((lo, hi)) = area.bounds() else { return Inside { y0: 0.0, h: 1.0, bands: Vec::new() } };
-        let n = ((area.vertex_count() / 8).clamp(1, 4096)) as f64;
-        let h = ((hi.y - lo.y) / n).max(1e-3);
-        let nb = ((hi.y - lo.y) / h).floor() as usize + 1;
-        let mut bands = vec![Vec::new(); nb];
-        for ring in area.rings() {
-            for i in 0..ring.len() {
-                let (a, b) = (ring[i], ring[(i + 1) % ring.len()]);
-                if a.y == b.y {
-                    continue;
-                }
-                let j0 = (((a.y.min(b.y) - lo.y) / h).floor().max(0.0) as usize).min(nb - 1);
-                let j1 = (((a.y.max(b.y) - lo.y) / h).floor().max(0.0) as usize).min(nb - 1);
-                for band in &mut bands[j0..=j1] {
-                    band.push((a, b));
-                }
-            }
-        }
-        Inside { y0: lo.y, h, bands }
-    }
-
-    fn contains(&self, p: DVec2) -> bool {
-        let f = (p.y - self.y0) / self.h;
-        if f.is_nan() || f < 0.0 || f as usize >= self.bands.len() {
-            return false;
-        }
-        let mut inside = false;
-        for &(a, b) in &self.bands[f as usize] {
-            if (a.y > p.y) != (b.y > p.y) {
-                let x = a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x);
-                if p.x < x {
-                    inside = !inside;
-                }
-            }
-        }
-        inside
-    }
-}
-
 /// What one level of a tool cuts given its prefix: chains and, per point, whether the disk
 /// there meets material.
 struct LevelCut<'a> {
@@ -875,9 +384,9 @@ fn level_cut<'a>(prep: &Prepared, k: usize, lv: &'a Level, prefix: &[usize], mat
         return none;
     }
     // the disk at p meets material: p inside it, or within the radius of its boundary
-    let inside = Inside::new(material);
+    let inside = InsideIndex::new(material);
     let rm = r + NEED_MARGIN;
-    let edges = crate::geom::index::EdgeIndex::from_area(material, rm.max(1.0));
+    let edges = EdgeIndex::from_area(material, rm.max(1.0));
     let meets = |p: DVec2| inside.contains(p) || edges.distance(p, rm) < rm;
     match prep.opts.decomposition {
         _ if prefix.is_empty() || prep.opts.decomposition == Decomposition::Trim => {
@@ -911,7 +420,7 @@ fn level_cut<'a>(prep: &Prepared, k: usize, lv: &'a Level, prefix: &[usize], mat
 
 /// The program of tool `k` after the tools `prefix`, its run, and the length of its path
 /// whose disk meets material.
-fn run_tool(prep: &Prepared, k: usize, prefix: &[usize], mats: &[Area]) -> (Toolpath, ToolRun, f64) {
+pub(super) fn run_tool(prep: &Prepared, k: usize, prefix: &[usize], mats: &[Area]) -> (Toolpath, ToolRun, f64) {
     let tg = &prep.tools[k];
     let spec = &tg.spec;
     let t0 = Instant::now();
@@ -1024,7 +533,7 @@ struct Piece<'a> {
 }
 
 /// True when the bounding boxes of two areas overlap.
-fn boxes_overlap(a: &Area, b: &Area) -> bool {
+pub(super) fn boxes_overlap(a: &Area, b: &Area) -> bool {
     match (a.bounds(), b.bounds()) {
         (Some((alo, ahi)), Some((blo, bhi))) => boxes_meet(alo, ahi, blo, bhi, 0.0),
         _ => false,
@@ -1099,9 +608,7 @@ impl Emitter<'_> {
             let mut a = a;
             if let (0, Some(i0)) = (a, rotate) {
                 let q = c.pts[i0];
-                self.go_to(q, lv, li);
-                self.tp.rapid(DVec3::new(q.x, q.y, z + APPROACH));
-                self.tp.line(MoveKind::Descend, DVec3::new(q.x, q.y, z), self.feed);
+                self.descend(q, lv, li);
                 self.lines(&c.pts[i0..=re], MoveKind::Cut, z);
                 self.lines(&c.pts[..=i0], MoveKind::Cut, z);
                 let back: Vec<DVec2> = c.pts[..=i0].iter().rev().copied().collect();
@@ -1129,9 +636,7 @@ impl Emitter<'_> {
                     }
                 }
             } else {
-                self.go_to(p, lv, li);
-                self.tp.rapid(DVec3::new(p.x, p.y, z + APPROACH));
-                self.tp.line(MoveKind::Descend, DVec3::new(p.x, p.y, z), self.feed);
+                self.descend(p, lv, li);
             }
             // the cut: straight runs merged (the points are a sampling of the loops' edges)
             let mut run: Vec<DVec2> = vec![c.pts[a]];
@@ -1146,6 +651,41 @@ impl Emitter<'_> {
                 run.push(c.pts[i]);
             }
             self.lines(&run, kind, z);
+        }
+    }
+
+    /// Down to `p` at level `lv`, where the disk is in air: a rapid to just above the level and
+    /// a feed move down, at `p` or, when the disk there reaches into the band along the part
+    /// that the material model counts as cleared ([`Prepared::bands`]: a sliver up to 0.03 mm
+    /// wide may stand there as high as the level above, on a sloping wall), at the nearest
+    /// point away from the band where it does not, and across to `p` at the level.
+    fn descend(&mut self, p: DVec2, lv: &Level, li: usize) {
+        let z = lv.z;
+        let r = self.tp.tool.radius();
+        let want = r + WALL_MARGIN;
+        // (pushed off the nearest band edge a few times: in a corner, off the next one too;
+        // 2 µm more, for the rounding of the coordinates; never further than NEED_MARGIN, so
+        // that the disk stays in air)
+        let band = &self.prep.band_edges[lv.zi];
+        let mut at = p;
+        for _ in 0..4 {
+            match band.nearest(at, want) {
+                Some((q, d)) if d > 1e-9 => at += (at - q) / d * (want - d + 0.002),
+                _ => break,
+            }
+        }
+        let clear = (at - p).length() < NEED_MARGIN
+            && band.distance(at, want) >= want
+            && !self.prep.bands[lv.zi].contains(at)
+            && lv.centres.contains(at);
+        if !clear {
+            at = p;
+        }
+        self.go_to(at, lv, li);
+        self.tp.rapid(DVec3::new(at.x, at.y, z + APPROACH));
+        self.tp.line(MoveKind::Descend, DVec3::new(at.x, at.y, z), self.feed);
+        if at != p {
+            self.tp.line(MoveKind::Cut, DVec3::new(p.x, p.y, z), self.feed);
         }
     }
 

@@ -1,0 +1,105 @@
+//! A picture of the stock seen from above, from a simulator's heights: grey by height (dark is
+//! deep), orange where rest material stands above the lowest a tool reaches, the stronger the
+//! thicker. Drawn straight into pixels (a cell each, or the worst of a block of cells on a large
+//! grid) and written as PNG.
+
+use crate::error::{Error, Result};
+
+/// Heights on a grid of `nx × ny` cells, row-major from the bottom row (the simulator's order).
+#[derive(Debug, Clone, Copy)]
+pub struct RestPicture<'a> {
+    /// Columns.
+    pub nx: usize,
+    /// Rows.
+    pub ny: usize,
+    /// The stock's top at each cell.
+    pub stock: &'a [f32],
+    /// The lowest height the tool reaches at each cell: the rest is the stock above it, drawn
+    /// where it is thicker than [`RestPicture::tol`].
+    pub low: &'a [f32],
+    /// The top and the bottom of the grey scale (the stock top and the floor), mm.
+    pub top: f64,
+    /// See [`RestPicture::top`].
+    pub bottom: f64,
+    /// Rest thinner than this is not drawn, mm.
+    pub tol: f64,
+    /// Rest this thick or more is drawn at full strength, mm.
+    pub full: f64,
+    /// The picture's longer side at most, pixels (blocks of cells make one pixel above it).
+    pub max_side: usize,
+}
+
+/// The picture as PNG bytes.
+pub fn png(p: &RestPicture) -> Result<Vec<u8>> {
+    let empty = || Error::Output { what: "picture".into(), reason: "it is empty".into() };
+    if p.nx == 0 || p.ny == 0 || p.stock.len() != p.nx * p.ny || p.low.len() != p.stock.len() {
+        return Err(empty());
+    }
+    let k = p.nx.max(p.ny).div_ceil(p.max_side.max(1));
+    let (w, h) = (p.nx.div_ceil(k), p.ny.div_ceil(k));
+    let mut pix = resvg::tiny_skia::Pixmap::new(w as u32, h as u32).ok_or_else(empty)?;
+    let span = (p.top - p.bottom).max(1e-9);
+    let data = pix.data_mut();
+    for bj in 0..h {
+        for bi in 0..w {
+            // the block: its mean height, and its thickest rest
+            let (mut sum, mut n, mut t) = (0.0, 0usize, 0.0f64);
+            for j in bj * k..((bj + 1) * k).min(p.ny) {
+                for i in bi * k..((bi + 1) * k).min(p.nx) {
+                    let c = j * p.nx + i;
+                    let s = f64::from(p.stock[c]);
+                    let s = if s.is_finite() { s.clamp(p.bottom, p.top) } else { p.bottom };
+                    sum += s;
+                    n += 1;
+                    if f64::from(p.low[c]) < p.top {
+                        t = t.max(s - f64::from(p.low[c]));
+                    }
+                }
+            }
+            let v = 60.0 + 180.0 * ((sum / n as f64 - p.bottom) / span).clamp(0.0, 1.0);
+            let a = if t > p.tol { (0.35 + 0.65 * (t / p.full.max(1e-9)).min(1.0)).min(1.0) } else { 0.0 };
+            let (r, g, b) = (v + (255.0 - v) * a, v + (140.0 - v) * a, v * (1.0 - a));
+            // image rows top down: y up in the grid
+            let o = ((h - 1 - bj) * w + bi) * 4;
+            data[o] = r.round() as u8;
+            data[o + 1] = g.round() as u8;
+            data[o + 2] = b.round() as u8;
+            data[o + 3] = 255;
+        }
+    }
+    pix.encode_png()
+        .map_err(|e| Error::Output { what: "picture".into(), reason: format!("cannot encode the PNG: {e}") })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rest_is_orange_and_large_grids_are_reduced() {
+        let (nx, ny) = (30, 10);
+        let stock: Vec<f32> = (0..nx * ny).map(|c| if c % nx < 10 { 5.0 } else { 0.0 }).collect();
+        let low = vec![0.0f32; nx * ny];
+        let p = RestPicture {
+            nx,
+            ny,
+            stock: &stock,
+            low: &low,
+            top: 10.0,
+            bottom: 0.0,
+            tol: 0.05,
+            full: 5.0,
+            max_side: 15,
+        };
+        let bytes = png(&p).expect("a picture");
+        let pix = resvg::tiny_skia::Pixmap::decode_png(&bytes).expect("a PNG");
+        assert_eq!((pix.width(), pix.height()), (15, 5));
+        let at = |x: u32, y: u32| pix.pixel(x, y).expect("inside");
+        // rest 5 mm thick: full orange; none: grey
+        let (o, g) = (at(1, 1), at(10, 1));
+        assert_eq!((o.red(), o.green(), o.blue()), (255, 140, 0));
+        assert_eq!(g.red(), g.green());
+        assert_eq!(g.green(), g.blue());
+        assert!(png(&RestPicture { nx: 0, ..p }).is_err());
+    }
+}
