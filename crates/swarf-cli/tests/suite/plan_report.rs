@@ -5,7 +5,7 @@
 use std::path::Path;
 use std::process::Command;
 
-mod common;
+use crate::common;
 use common::TempDir;
 
 /// The bowl cavity (sloping walls, a floor, a deeper pocket) with three tools of paper 3's

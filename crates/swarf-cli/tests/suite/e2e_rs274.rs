@@ -18,7 +18,7 @@ use std::process::{Command, Stdio};
 
 // ---- small helpers ---------------------------------------------------------------------------
 
-mod common;
+use crate::common;
 use common::TempDir;
 
 fn repo_root() -> PathBuf {

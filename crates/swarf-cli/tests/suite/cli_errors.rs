@@ -9,7 +9,7 @@ use std::process::{Command, Output, Stdio};
 
 // ---- helpers ---------------------------------------------------------------------------------
 
-mod common;
+use crate::common;
 use common::TempDir;
 
 fn case(name: &str) -> PathBuf {

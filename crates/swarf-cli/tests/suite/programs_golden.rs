@@ -7,14 +7,14 @@
 //! when a change fixes a defect or improves the programs (the commit says which):
 //!
 //! ```sh
-//! SWARF_BLESS=1 cargo test -p swarf-cli --test programs_golden
+//! SWARF_BLESS=1 cargo test -p swarf-cli --test suite programs_golden::
 //! ```
 //!
 //! On a mismatch the programs are kept under `target/golden-actual/` (the failure names the
 //! folder) so that they can be compared with those of the commit that made the record. The
 //! spiral strategy's default (its floor chosen by simulating candidates) takes minutes on four of
 //! the seven cases; those four run here with a pinned floor and ζ, and all seven with the default
-//! in the ignored test `spiral_defaults` (`cargo test -p swarf-cli --test programs_golden --
+//! in the ignored test `spiral_defaults` (`cargo test -p swarf-cli --test suite programs_golden:: --
 //! --ignored`).
 
 use sha2::{Digest, Sha256};
@@ -22,7 +22,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-mod common;
+use crate::common;
 use common::TempDir;
 
 fn repo_root() -> PathBuf {
@@ -187,8 +187,8 @@ fn read_record() -> BTreeMap<String, (String, usize)> {
 
 fn write_record(all: &BTreeMap<String, (String, usize)>) {
     let mut text = String::from(
-        "# SHA-256, size in bytes and name of every program of tests/programs_golden.rs\n\
-         # remake with: SWARF_BLESS=1 cargo test -p swarf-cli --test programs_golden (and -- --ignored)\n",
+        "# SHA-256, size in bytes and name of every program of tests/suite/programs_golden.rs\n\
+         # remake with: SWARF_BLESS=1 cargo test -p swarf-cli --test suite programs_golden:: (and -- --ignored)\n",
     );
     for (name, (h, n)) in all {
         text.push_str(&format!("{h} {n} {name}\n"));
