@@ -276,6 +276,10 @@ struct PlanArgs {
     /// No pictures of the rest material.
     #[arg(long)]
     no_pictures: bool,
+    /// Skip the replay of the chosen programs on the simulator (no gouge, rapid collision or
+    /// rest figures per program in the report, no pictures).
+    #[arg(long)]
+    no_simulate: bool,
     /// Rows of the table printed (the cheapest sequences).
     #[arg(long, value_name = "N", default_value_t = 15)]
     rows: usize,
@@ -911,6 +915,7 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
         prune: !a.exhaustive,
         ramp_deg: a.ramp_angle.unwrap_or(d.ramp_deg),
         clearance: a.clearance.unwrap_or(d.clearance),
+        simulate: !a.no_simulate,
         ..d
     };
     opts.validate()?;
@@ -1046,6 +1051,8 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
                 100.0 * last.rest_fraction,
                 sp.simulate_s
             );
+        } else {
+            println!("not simulated: no gouge, rapid collision or rest figures");
         }
         println!(
             "wrote {} programs into {} and the report {}",

@@ -140,7 +140,8 @@ fn run_rough(r: &Rough, dir: &Path) -> Vec<u8> {
     std::fs::read(&out).unwrap_or_else(|e| panic!("{}: {e}", out.display()))
 }
 
-/// `swarf plan` on the 3D example with the paper's tool table: each program's bytes by name.
+/// `swarf plan` on the 3D example with the paper's tool table, without the replay: each program's
+/// bytes by name.
 fn run_plan(dir: &Path, extra: &[&str], tag: &str) -> Vec<(String, Vec<u8>)> {
     let out = dir.join(format!("plan-{tag}"));
     let o = swarf()
@@ -148,7 +149,7 @@ fn run_plan(dir: &Path, extra: &[&str], tag: &str) -> Vec<(String, Vec<u8>)> {
         .arg(repo_root().join("examples/3d/bowl_cavity.json"))
         .arg("--tools")
         .arg(repo_root().join("examples/tools/table1.json"))
-        .args(["--no-pictures", "-q", "--output-dir"])
+        .args(["--no-simulate", "-q", "--output-dir"])
         .arg(&out)
         .args(extra)
         .output()
@@ -165,6 +166,12 @@ fn run_plan(dir: &Path, extra: &[&str], tag: &str) -> Vec<(String, Vec<u8>)> {
         .collect();
     v.sort();
     assert!(!v.is_empty(), "swarf plan wrote no program");
+    // --no-simulate: the programs are the same, the report says they were not replayed
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).expect("plan.json")).expect("json");
+    let programs = report["best"]["programs"].as_array().expect("programs");
+    assert_eq!(programs.len(), v.len());
+    assert!(programs.iter().all(|p| p["simulated"] == false && p["rest_picture"].is_null()), "{programs:?}");
     v
 }
 

@@ -202,7 +202,9 @@ pub const MAX_TOOLS: usize = 20;
 /// let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
 /// let case = format!("{root}/examples/3d/bowl_cavity.json");
 /// let Input::Mesh(job) = load_input(case.as_ref(), &Overrides::DEFAULT)? else { unreachable!() };
-/// let db = ToolDb::read(format!("{root}/examples/tools/table1.json").as_ref())?;
+/// let mut db = ToolDb::read(format!("{root}/examples/tools/table1.json").as_ref())?;
+/// // three of paper 3's tools: D25, D20 and D10
+/// db.tools.retain(|t| ["T4", "T5", "T8"].contains(&t.id.as_str()));
 /// let plan = plan_tools(&job, &db, &SeqOptions::DEFAULT)?;
 /// let best = plan.best();
 /// // one program per tool of the cheapest sequence, biggest first
