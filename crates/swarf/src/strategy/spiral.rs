@@ -180,12 +180,15 @@ struct PieceField {
     shape: Option<PieceShape>,
 }
 
+/// A grid sampled once and shared by the threads that ask for it.
+type SharedGrid = Arc<OnceLock<Option<Grid>>>;
+
 struct PieceShape {
     base: AreaField,
     top: DVec2,
     fmax: f64,
     /// [`Grid::of_field`] of the shaped function from each start asked for so far.
-    grids: Mutex<Vec<(DVec2, Arc<OnceLock<Option<Grid>>>)>>,
+    grids: Mutex<Vec<(DVec2, SharedGrid)>>,
 }
 
 impl SpiralFields {

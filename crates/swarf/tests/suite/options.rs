@@ -49,7 +49,8 @@ fn rough_with(what: &str, job: &Job, opts: &RoughOptions) -> Setting {
 #[test]
 fn bad_job_values_name_their_setting() {
     let opts = RoughOptions { simulate: false, ..RoughOptions::DEFAULT };
-    let cases: Vec<(&str, Box<dyn Fn(&mut Job)>, Setting)> = vec![
+    type Edit = Box<dyn Fn(&mut Job)>;
+    let cases: Vec<(&str, Edit, Setting)> = vec![
         ("tool diameter 0", Box::new(|j| j.cutting.tool.diameter = 0.0), Setting::ToolDiameter),
         ("tool diameter NaN", Box::new(|j| j.cutting.tool.diameter = f64::NAN), Setting::ToolDiameter),
         ("stepover 0", Box::new(|j| j.cutting.width = Width::Stepover(0.0)), Setting::Stepover),
