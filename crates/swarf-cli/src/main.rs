@@ -810,12 +810,12 @@ fn write_outputs(scene: impl FnOnce() -> Scene, res: &RoughResult, out: &Outputs
 fn summary(r: &swarf::report::Report) -> String {
     if !r.simulated {
         return format!(
-            "{} {}: {:.0} mm cut, {:.2} min, {} plunges, not simulated, computed in {:.2} s",
-            r.input, r.strategy, r.cut_length_mm, r.time_min, r.plunges, r.compute_s
+            "{} {}: {:.0} mm cut, {:.2} min, {} plunges, not simulated, planned in {:.2} s",
+            r.input, r.strategy, r.cut_length_mm, r.time_min, r.plunges, r.total_s
         );
     }
     format!(
-        "{} {}: {:.0} mm cut, {:.2} min, engagement max {:.1} p95 {:.1} deg, {} plunges, {} gouges, {} rapid collisions, rest {:.2}%, computed in {:.2} s",
+        "{} {}: {:.0} mm cut, {:.2} min, engagement max {:.1} p95 {:.1} deg, {} plunges, {} gouges, {} rapid collisions, rest {:.2}%, {:.2} s (planned in {:.2} s, proven in {:.2} s)",
         r.input,
         r.strategy,
         r.cut_length_mm,
@@ -826,7 +826,9 @@ fn summary(r: &swarf::report::Report) -> String {
         r.gouges,
         r.rapid_collisions,
         r.rest_fraction * 100.0,
-        r.compute_s
+        r.total_s,
+        r.compute_s,
+        r.simulate_s
     )
 }
 

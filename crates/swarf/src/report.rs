@@ -94,6 +94,8 @@ pub struct Report {
     pub compute_s: f64,
     /// Time to simulate it for this report (s).
     pub simulate_s: f64,
+    /// Time from the start of the planning to the report: planning, posting and simulation (s).
+    pub total_s: f64,
     /// Whether the program was simulated. Without a simulation (`--no-simulate`) the
     /// simulation's figures (engagement, air cutting, gouges, rapid collisions, rest) were not
     /// measured and read 0, and `plunges` counts the plunges the program marks.

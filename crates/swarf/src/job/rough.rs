@@ -151,6 +151,7 @@ pub(crate) fn finish(
     progress: &mut dyn FnMut(Stage, f64),
     simulate: impl FnOnce(&Toolpath, &mut dyn FnMut(Stage, f64)) -> Result<(Replay, crate::sim::Rest)>,
 ) -> Result<RoughResult> {
+    let t0 = Instant::now();
     let c = about.cutting;
     let mut header = Header { spindle_rpm: c.spindle_rpm, ..Default::default() };
     header.lines.push(format!(
@@ -194,6 +195,7 @@ pub(crate) fn finish(
     } else {
         report::fill_program(&mut rep, &toolpath, c.rapid_rate);
     }
+    rep.total_s = compute_s + t0.elapsed().as_secs_f64();
     Ok(RoughResult { toolpath, gcode, report: rep, replay })
 }
 

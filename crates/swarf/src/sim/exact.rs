@@ -49,15 +49,57 @@ pub struct ExactModel {
     nx: usize,
     ny: usize,
     cells: Vec<Vec<u32>>,
-    stamp: Vec<u32>,
-    query: u32,
     stock_rings: Vec<Vec<DVec2>>,
     stock_edges: crate::geom::index::EdgeIndex,
     stock_top: f64,
     dz: f64,
-    /// scratch buffers
+    scratch: Scratch,
+}
+
+/// The buffers of one engagement query (one set a thread when queries run in parallel).
+#[derive(Debug, Clone, Default)]
+struct Scratch {
     angles: Vec<f64>,
+    base: Vec<(f64, f64)>,
     covered: Vec<(f64, f64)>,
+    /// Per primitive, the last query that looked at it (a primitive is listed in every cell it
+    /// meets), and the number of this query.
+    stamp: Vec<u32>,
+    query: u32,
+}
+
+impl Scratch {
+    /// Starts a query over `n` primitives.
+    fn next_query(&mut self, n: usize) {
+        if self.stamp.len() < n {
+            self.stamp.resize(n, 0);
+        }
+        self.query = self.query.wrapping_add(1);
+        if self.query == 0 {
+            self.stamp.iter_mut().for_each(|s| *s = 0);
+            self.query = 1;
+        }
+    }
+}
+
+/// An engagement query kept for later ([`ExactModel::engagements`]): the arguments of
+/// [`ExactModel::engagement`] and the number of primitives recorded when it was asked.
+#[derive(Debug, Clone, Copy)]
+pub struct Query {
+    /// Tool centre.
+    pub c: DVec2,
+    /// Tool tip height.
+    pub z: f64,
+    /// Direction of motion.
+    pub dir: DVec2,
+    /// Ring radius.
+    pub rho: f64,
+    /// Height above the tip below which material does not count.
+    pub eps: f64,
+    /// The part of the current move already cut.
+    pub current: Option<Path>,
+    /// The primitives recorded before the query: only these count.
+    pub upto: u32,
 }
 
 impl ExactModel {
@@ -77,14 +119,11 @@ impl ExactModel {
             nx,
             ny,
             cells: vec![Vec::new(); nx * ny],
-            stamp: Vec::new(),
-            query: 0,
             stock_rings,
             stock_edges,
             stock_top,
             dz: dz.max(1e-4),
-            angles: Vec::new(),
-            covered: Vec::new(),
+            scratch: Scratch::default(),
         }
     }
 
@@ -122,7 +161,6 @@ impl ExactModel {
             let id = self.prims.len() as u32;
             let pp = if len < 1e-12 { path.sub(0.0, 0.0) } else { p };
             self.prims.push(Prim::new(pp, z, self.r));
-            self.stamp.push(0);
             let (lo, hi) = p.bbox(self.r);
             if let Some((x0, x1, y0, y1)) = self.cell_range(lo, hi) {
                 for y in y0..=y1 {
@@ -145,48 +183,75 @@ impl ExactModel {
     /// material counting when it stands more than `eps` above the tip. `current` is the part of
     /// the current move already cut (excluded as material). `rho` is the ring radius.
     pub fn engagement(&mut self, c: DVec2, z: f64, dir: DVec2, rho: f64, eps: f64, current: Option<&Path>) -> f64 {
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let q = Query { c, z, dir, rho, eps, current: current.copied(), upto: self.prims.len() as u32 };
+        let tea = self.measure(&q, &mut scratch);
+        self.scratch = scratch;
+        tea
+    }
+
+    /// The queries' engagements, in their order, as [`Self::engagement`] would have answered
+    /// each when it was asked (only the primitives recorded before it count). They run in
+    /// parallel; the answers do not depend on the number of threads.
+    pub fn engagements(&self, queries: &[Query]) -> Vec<f64> {
+        use rayon::prelude::*;
+        // fixed chunks, a scratch each: the same work whatever the number of threads
+        queries
+            .par_chunks(512)
+            .flat_map_iter(|chunk| {
+                let mut scratch = Scratch::default();
+                chunk.iter().map(|q| self.measure(q, &mut scratch)).collect::<Vec<_>>()
+            })
+            .collect()
+    }
+
+    /// The number of primitives recorded so far (a [`Query::upto`]).
+    pub fn recorded(&self) -> u32 {
+        self.prims.len() as u32
+    }
+
+    fn measure(&self, q: &Query, sc: &mut Scratch) -> f64 {
+        let Query { c, z, dir, rho, eps, current, upto } = *q;
         if z + eps >= self.stock_top || dir.length_squared() < 1e-24 {
             return 0.0;
         }
         let ring = Ring { c, rho, u: dir.normalize() };
         // 1. front half inside the stock
-        self.angles.clear();
-        self.angles.push(-1.0);
-        self.angles.push(1.0);
+        sc.angles.clear();
+        sc.angles.push(-1.0);
+        sc.angles.push(1.0);
         let m = DVec2::splat(rho);
-        let angles = &mut self.angles;
+        let angles = &mut sc.angles;
         self.stock_edges.for_each_near(c - m, c + m, |_, a, b| ring.segment_crossings(a, b, angles));
-        self.angles.sort_by(f64::total_cmp);
-        let mut base_iv: Vec<(f64, f64)> = Vec::new();
-        for w in self.angles.windows(2) {
+        sc.angles.sort_by(f64::total_cmp);
+        sc.base.clear();
+        for w in sc.angles.windows(2) {
             if w[1] - w[0] < 1e-12 {
                 continue;
             }
             if self.in_stock(ring.point(0.5 * (w[0] + w[1]))) {
-                push_merge(&mut base_iv, (w[0], w[1]));
+                push_merge(&mut sc.base, (w[0], w[1]));
             }
         }
-        if base_iv.is_empty() {
+        if sc.base.is_empty() {
             return 0.0;
         }
-        // 2. intervals covered by cuts at or below this level
-        self.covered.clear();
-        self.query = self.query.wrapping_add(1);
-        if self.query == 0 {
-            self.stamp.iter_mut().for_each(|s| *s = 0);
-            self.query = 1;
-        }
+        // 2. intervals covered by cuts at or below this level: the primitives recorded before
+        // the query, of the cells the ring's box meets, each once
+        sc.covered.clear();
+        sc.next_query(upto as usize);
         let rr = self.r;
         let zq = z + eps;
         if let Some((x0, x1, y0, y1)) = self.cell_range(c - m, c + m) {
             for y in y0..=y1 {
                 for x in x0..=x1 {
-                    for &id in &self.cells[y * self.nx + x] {
+                    // a cell lists its primitives in the order they were recorded
+                    for &id in self.cells[y * self.nx + x].iter().take_while(|&&id| id < upto) {
                         let k = id as usize;
-                        if self.stamp[k] == self.query {
+                        if sc.stamp[k] == sc.query {
                             continue;
                         }
-                        self.stamp[k] = self.query;
+                        sc.stamp[k] = sc.query;
                         let p = &self.prims[k];
                         if p.z > zq {
                             continue;
@@ -197,21 +262,21 @@ impl ExactModel {
                         if v.dot(ring.u) + hr < 0.0 || v.length() - hr > rho {
                             continue;
                         }
-                        covered_intervals(&p.path, &p.fast, rr, &ring, &mut self.angles, &mut self.covered);
+                        covered_intervals(&p.path, &p.fast, rr, &ring, &mut sc.angles, &mut sc.covered);
                     }
                 }
             }
         }
-        if let Some(cur) = current {
-            covered_intervals(cur, &Fast::new(cur), rr, &ring, &mut self.angles, &mut self.covered);
+        if let Some(cur) = &current {
+            covered_intervals(cur, &Fast::new(cur), rr, &ring, &mut sc.angles, &mut sc.covered);
         }
         // 3. measure base minus covered (the angle of a key t is 2 atan t)
-        self.covered.sort_by(|a, b| a.0.total_cmp(&b.0));
+        sc.covered.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut total = 0.0;
         let mut open = |a: f64, b: f64| total += 2.0 * (b.atan() - a.atan());
-        for &(a, b) in &base_iv {
+        for &(a, b) in &sc.base {
             let mut cur = a;
-            for &(ca, cb) in &self.covered {
+            for &(ca, cb) in &sc.covered {
                 if cb <= cur {
                     continue;
                 }
@@ -459,6 +524,45 @@ mod tests {
             assert!((exact - expect).abs() < 0.01);
             assert!((tea - exact).abs() < 0.6, "stepover {s}: {tea} vs {exact}");
         }
+    }
+
+    /// Queries answered later, all at once and in parallel, read what the model held when they
+    /// were asked: the same bits as asking at once.
+    #[test]
+    fn deferred_queries_answer_as_at_once() {
+        let r = 3.0;
+        let mut m = model(r);
+        let (mut now, mut queries) = (Vec::new(), Vec::new());
+        for k in 0..12 {
+            let y = 1.5 * k as f64;
+            let (a, b) = (DVec3::new(-40.0, y, -1.0), DVec3::new(40.0, y, -1.0));
+            for i in 1..=80 {
+                let t = i as f64 / 80.0;
+                let c = (a + (b - a) * t).truncate();
+                let cur = Path::Line { a, b: a + (b - a) * t };
+                now.push(m.engagement(c, -1.0, DVec2::X, r + 1e-4, 0.01, Some(&cur)));
+                queries.push(Query {
+                    c,
+                    z: -1.0,
+                    dir: DVec2::X,
+                    rho: r + 1e-4,
+                    eps: 0.01,
+                    current: Some(cur),
+                    upto: m.recorded(),
+                });
+            }
+            m.add(&Path::Line { a, b });
+        }
+        let later = m.engagements(&queries);
+        assert_eq!(
+            now.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            later.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+        );
+        // the first pass is a full slot, the later ones read the stepover's angle
+        assert!(
+            (now[40] - 180.0).abs() < 0.01
+                && (now[80 * 5 + 40] - 90.0 - (0.5f64 - 1.0).asin().to_degrees()).abs() < 0.6
+        );
     }
 
     #[test]

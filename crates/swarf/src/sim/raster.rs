@@ -1,7 +1,7 @@
 //! The raster material model and the replay of a toolpath on it.
 
 use super::SimOptions;
-use super::exact::ExactModel;
+use super::exact::{ExactModel, Query};
 use super::grid::{Grid, ceil_i, floor_i};
 use super::replay::{Replay, Rest};
 use super::sweep::{Fast, Path};
@@ -212,6 +212,8 @@ pub struct RasterSim {
     reach: Vec<bool>,
     circ: Vec<DVec2>,
     exact: ExactModel,
+    /// Exact engagement queries of the replay, answered at its end ([`Engine::deferred`]).
+    queries: Vec<Query>,
     keep: Area,
     keep_edges: EdgeIndex,
     part_top_eff: f64,
@@ -322,6 +324,7 @@ impl RasterSim {
             reach,
             circ,
             exact,
+            queries: Vec::new(),
             keep: regions.keep.clone(),
             keep_edges,
             part_top_eff,
@@ -1015,11 +1018,24 @@ impl super::replay::Engine for RasterSim {
         RasterSim::material_under(self, c, z)
     }
 
-    fn engagement(&mut self, p: DVec3, dir: DVec2, cur: &Path, before: &Path) -> (f64, f64) {
-        (
-            self.engagement_exact(p.truncate(), p.z, dir, Some(cur)),
-            self.engagement_pixel(p.truncate(), p.z, dir, Some(before)),
-        )
+    fn engagement(&mut self, p: DVec3, dir: DVec2, cur: &Path, before: &Path) -> (Option<f64>, f64) {
+        // the exact measure reads only the cuts recorded so far, which stay as they are: it is
+        // asked for after the replay, all samples at once on every core
+        self.queries.push(Query {
+            c: p.truncate(),
+            z: p.z,
+            dir,
+            rho: self.r + self.ring_delta,
+            eps: self.eps,
+            current: Some(*cur),
+            upto: self.exact.recorded(),
+        });
+        (None, self.engagement_pixel(p.truncate(), p.z, dir, Some(before)))
+    }
+
+    fn deferred(&mut self) -> Vec<f64> {
+        let queries = std::mem::take(&mut self.queries);
+        self.exact.engagements(&queries)
     }
 
     fn gouge_depth(&self, path: &Path) -> (f64, DVec3) {

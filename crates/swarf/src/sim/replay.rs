@@ -100,8 +100,13 @@ pub(crate) trait Engine {
     fn material_under(&self, c: DVec2, z: f64) -> bool;
     /// Engagement (the engine's own measure, and the pixel measure or the same again), degrees,
     /// of the tool at `p` moving along `dir`; `cur` is the current move up to this sample,
-    /// `before` up to the previous one.
-    fn engagement(&mut self, p: DVec3, dir: DVec2, cur: &Path, before: &Path) -> (f64, f64);
+    /// `before` up to the previous one. The engine's own measure may be left for later (`None`):
+    /// [`Engine::deferred`] then gives it.
+    fn engagement(&mut self, p: DVec3, dir: DVec2, cur: &Path, before: &Path) -> (Option<f64>, f64);
+    /// The engagements left for later, in the order they were asked.
+    fn deferred(&mut self) -> Vec<f64> {
+        Vec::new()
+    }
     /// Gouge depth of a move (0 when clean) and where.
     fn gouge_depth(&self, path: &Path) -> (f64, DVec3);
     /// Cuts a whole move into the material.
@@ -123,6 +128,8 @@ pub(crate) fn run<M: Engine>(m_: &mut M, tp: &Toolpath, progress: &mut dyn FnMut
     let mut bore: Option<(DVec2, f64, f64)> = None; // centre, radius, length allowance left
     let mut entry_pts: Vec<DVec3> = Vec::new();
     let mut entry_arc_center: Option<(DVec2, f64)> = None;
+    // samples whose engagement the engine measures after the replay
+    let mut later: Vec<usize> = Vec::new();
     for (mi, (from, m)) in tp.segments().enumerate() {
         if mi % 256 == 0 {
             progress(mi as f64 / nmoves as f64);
@@ -188,8 +195,17 @@ pub(crate) fn run<M: Engine>(m_: &mut M, tp: &Toolpath, progress: &mut dyn FnMut
                     // to the previous sample is what it must not see (up to this one would
                     // swallow the ring's sides)
                     let before = path.sub(0.0, (k - 1) as f64 / n as f64);
-                    let (tea, tea_px) =
-                        if kind == SampleKind::Plunge { (360.0, 360.0) } else { m_.engagement(p, dir, &cur, &before) };
+                    let (tea, tea_px) = if kind == SampleKind::Plunge {
+                        (360.0, 360.0)
+                    } else {
+                        match m_.engagement(p, dir, &cur, &before) {
+                            (Some(tea), px) => (tea, px),
+                            (None, px) => {
+                                later.push(out.samples.len());
+                                (f64::NAN, px)
+                            }
+                        }
+                    };
                     cum += step_len;
                     let in_bore = match (&mut bore, kind) {
                         (_, SampleKind::Descending | SampleKind::Plunge)
@@ -228,6 +244,11 @@ pub(crate) fn run<M: Engine>(m_: &mut M, tp: &Toolpath, progress: &mut dyn FnMut
             out.gouges.push(Event { move_index: mi, at: at.to_array(), depth: g });
         }
         m_.cut_move(&path);
+    }
+    let exact = m_.deferred();
+    assert_eq!(exact.len(), later.len(), "an engine answers every engagement it left for later");
+    for (k, tea) in later.into_iter().zip(exact) {
+        out.samples[k].tea = tea as f32;
     }
     progress(1.0);
     out.removed_volume = m_.removed_volume();

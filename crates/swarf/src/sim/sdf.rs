@@ -666,10 +666,10 @@ impl Engine for SdfSim {
         false
     }
 
-    fn engagement(&mut self, p: DVec3, dir: DVec2, cur: &Path, _before: &Path) -> (f64, f64) {
+    fn engagement(&mut self, p: DVec3, dir: DVec2, cur: &Path, _before: &Path) -> (Option<f64>, f64) {
         // (no pixel measure here: the field's engagement stands for both)
         let e = SdfSim::engagement(self, p.truncate(), p.z, dir, Some(cur));
-        (e, e)
+        (Some(e), e)
     }
 
     fn gouge_depth(&self, path: &Path) -> (f64, DVec3) {

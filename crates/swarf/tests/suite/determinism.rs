@@ -15,7 +15,7 @@ fn run(job: &Job, opts: &RoughOptions, threads: usize) -> RoughResult {
 
 /// The report without the fields that measure time.
 fn untimed(r: &Report) -> Report {
-    Report { compute_s: 0.0, simulate_s: 0.0, ..r.clone() }
+    Report { compute_s: 0.0, simulate_s: 0.0, total_s: 0.0, ..r.clone() }
 }
 
 fn check(job: &Job, opts: &RoughOptions, what: &str) {
