@@ -12,6 +12,10 @@
 //!
 //! A primitive whose z changes (helix, ramp) is split into pieces at most `dz` deep, each
 //! counted as clearing down to its highest point — slightly conservative on the way down.
+//!
+//! Primitives are only ever added, so a query asked after `n` of them can be answered later
+//! from those `n` alone: a replay keeps its queries ([`Query`]) and answers them all at its end
+//! on every core ([`ExactModel::engagements`]), with the same bits as at once.
 
 use super::sweep::{Fast, Path};
 use crate::geom::DVec2;
