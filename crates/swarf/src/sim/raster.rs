@@ -186,6 +186,9 @@ fn row_columns(grid: &Grid, st: Option<&Stadium>, j: usize, i0: usize, i1: usize
     (lo <= hi).then_some((lo as usize, hi as usize))
 }
 
+/// Exact engagement queries answered together during a replay (see [`Engine::deferred`]).
+const QUERY_BATCH: usize = 1 << 14;
+
 /// The raster simulator.
 #[derive(Debug, Clone)]
 pub struct RasterSim {
@@ -212,8 +215,10 @@ pub struct RasterSim {
     reach: Vec<bool>,
     circ: Vec<DVec2>,
     exact: ExactModel,
-    /// Exact engagement queries of the replay, answered at its end ([`Engine::deferred`]).
+    /// Exact engagement queries of the replay not answered yet, and the answers so far, in
+    /// order ([`Engine::deferred`]).
     queries: Vec<Query>,
+    answers: Vec<f64>,
     keep: Area,
     keep_edges: EdgeIndex,
     part_top_eff: f64,
@@ -325,6 +330,7 @@ impl RasterSim {
             circ,
             exact,
             queries: Vec::new(),
+            answers: Vec::new(),
             keep: regions.keep.clone(),
             keep_edges,
             part_top_eff,
@@ -1019,8 +1025,13 @@ impl super::replay::Engine for RasterSim {
     }
 
     fn engagement(&mut self, p: DVec3, dir: DVec2, cur: &Path, before: &Path) -> (Option<f64>, f64) {
-        // the exact measure reads only the cuts recorded so far, which stay as they are: it is
-        // asked for after the replay, all samples at once on every core
+        // the exact measure reads only the cuts recorded so far, which stay as they are: the
+        // queries are answered in batches on every core (a batch bounds the memory they hold)
+        if self.queries.len() >= QUERY_BATCH {
+            let answers = self.exact.engagements(&self.queries);
+            self.answers.extend(answers);
+            self.queries.clear();
+        }
         self.queries.push(Query {
             c: p.truncate(),
             z: p.z,
@@ -1034,8 +1045,11 @@ impl super::replay::Engine for RasterSim {
     }
 
     fn deferred(&mut self) -> Vec<f64> {
-        let queries = std::mem::take(&mut self.queries);
-        self.exact.engagements(&queries)
+        let last = self.exact.engagements(&self.queries);
+        self.queries.clear();
+        let mut answers = std::mem::take(&mut self.answers);
+        answers.extend(last);
+        answers
     }
 
     fn gouge_depth(&self, path: &Path) -> (f64, DVec3) {
