@@ -202,6 +202,10 @@ struct CommonOpts {
     /// Skip the simulation (no engagement, gouge or rest figures).
     #[arg(long)]
     no_simulate: bool,
+    /// Measure the exact engagement at every sample of the simulation (slower) instead of
+    /// every R/12 along a move and wherever the pixel reading leaves it in doubt.
+    #[arg(long, conflicts_with = "no_simulate")]
+    exact_every_sample: bool,
     /// SVG pixels per inch (old Inkscape files use 90).
     #[arg(long, value_name = "PX", allow_negative_numbers = true)]
     svg_dpi: Option<f64>,
@@ -631,6 +635,7 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
             Some(SimArg::Sdf) => SimEngine::Sdf,
             None => SimOptions::DEFAULT.engine,
         },
+        exact_every_sample: o.exact_every_sample,
         ..SimOptions::DEFAULT
     };
     let opts = RoughOptions {

@@ -15,10 +15,20 @@
 //!
 //! Primitives are only ever added, so a query asked after `n` of them can be answered later
 //! from those `n` alone: a replay keeps its queries ([`Query`]) and answers them all at its end
-//! on every core ([`ExactModel::engagements`]), with the same bits as at once.
+//! on every core ([`ExactModel::engagements`]), with the same bits as at once. A query reads the
+//! primitives newest first and skips an older one that cannot reach the arcs still uncovered.
+//! [`ExactModel::engagements_guided`] measures only anchors along a move and the stretches
+//! between them where the pixel readings leave the engagement in doubt (`docs/simulation.md`).
 
 use super::sweep::{Fast, Path};
 use crate::geom::DVec2;
+
+/// Largest departure, degrees, of a pixel reading from the line between its anchors' readings
+/// for [`ExactModel::engagements_guided`] to draw the exact engagement along that line.
+pub const GUIDE_SMOOTH_DEG: f64 = 3.0;
+/// Largest difference, degrees, between an anchor's pixel reading and its exact engagement for
+/// [`ExactModel::engagements_guided`] to trust the pixels beside it.
+pub const GUIDE_AGREE_DEG: f64 = 8.0;
 
 /// One swept primitive at constant z (the level it clears down to).
 #[derive(Debug, Clone, Copy)]
@@ -65,7 +75,12 @@ pub struct ExactModel {
 struct Scratch {
     angles: Vec<f64>,
     base: Vec<(f64, f64)>,
+    /// Covered intervals of the ring (sorted and merged by [`Scratch::gaps`]).
     covered: Vec<(f64, f64)>,
+    /// The primitives that may cover part of the ring, newest first.
+    cand: Vec<u32>,
+    /// A disk round each arc of the base not covered yet (centre, radius).
+    disks: Vec<(DVec2, f64)>,
     /// Per primitive, the last query that looked at it (a primitive is listed in every cell it
     /// meets), and the number of this query.
     stamp: Vec<u32>,
@@ -73,6 +88,51 @@ struct Scratch {
 }
 
 impl Scratch {
+    /// Sorts and merges the covered intervals, and puts a disk round each arc of the base
+    /// they leave uncovered into `disks`: the smallest that holds the arc (the arcs are at most
+    /// a half turn, so it is the one on their chord). False when nothing is left uncovered.
+    fn gaps(&mut self, ring: &Ring) -> bool {
+        self.covered.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut w = 0;
+        for i in 0..self.covered.len() {
+            let iv = self.covered[i];
+            if w > 0 && iv.0 <= self.covered[w - 1].1 {
+                self.covered[w - 1].1 = self.covered[w - 1].1.max(iv.1);
+            } else {
+                self.covered[w] = iv;
+                w += 1;
+            }
+        }
+        self.covered.truncate(w);
+        self.disks.clear();
+        let mut disk = |a: f64, b: f64| {
+            let (pa, pb) = (ring.point(a), ring.point(b));
+            self.disks.push((0.5 * (pa + pb), 0.5 * (pb - pa).length()));
+        };
+        for &(a, b) in &self.base {
+            let mut cur = a;
+            for &(ca, cb) in &self.covered {
+                if cb <= cur {
+                    continue;
+                }
+                if ca >= b {
+                    break;
+                }
+                if ca > cur {
+                    disk(cur, ca);
+                }
+                cur = cur.max(cb);
+                if cur >= b {
+                    break;
+                }
+            }
+            if cur < b {
+                disk(cur, b);
+            }
+        }
+        !self.disks.is_empty()
+    }
+
     /// Starts a query over `n` primitives.
     fn next_query(&mut self, n: usize) {
         if self.stamp.len() < n {
@@ -209,6 +269,80 @@ impl ExactModel {
             .collect()
     }
 
+    /// The engagements of the queries of whole moves, guided by their pixel readings: exactly
+    /// at anchors (every `stride`-th sample of a move, and its first and last), and between two
+    /// anchors either exactly too or, where the reading is unambiguous, along the line between
+    /// the anchors' exact values. A stretch between anchors is unambiguous when its pixel
+    /// readings stay within [`GUIDE_SMOOTH_DEG`] of the line between the anchors' readings and
+    /// each anchor's reading is within [`GUIDE_AGREE_DEG`] of its exact value: the engagement
+    /// then changes smoothly there, as the pixel ring sees it, and the pixels agree with the
+    /// geometry at both ends. `pixel[i]` is the pixel reading of `queries[i]`; `starts` are the
+    /// indices of the first query of each move, ascending. The answers do not depend on the
+    /// number of threads.
+    pub fn engagements_guided(&self, queries: &[Query], pixel: &[f32], starts: &[usize], stride: usize) -> Vec<f64> {
+        assert_eq!(queries.len(), pixel.len(), "a pixel reading per query");
+        let stride = stride.max(1);
+        let n = queries.len();
+        let mut ends: Vec<(usize, usize)> = Vec::with_capacity(starts.len());
+        for (k, &a) in starts.iter().enumerate() {
+            let b = starts.get(k + 1).copied().unwrap_or(n);
+            if b > a {
+                ends.push((a, b));
+            }
+        }
+        // 1. the anchors
+        let mut anchor = vec![false; n];
+        for &(a, b) in &ends {
+            for i in (a..b).step_by(stride) {
+                anchor[i] = true;
+            }
+            anchor[b - 1] = true;
+        }
+        let first: Vec<usize> = (0..n).filter(|&i| anchor[i]).collect();
+        let qs: Vec<Query> = first.iter().map(|&i| queries[i]).collect();
+        let mut out = vec![f64::NAN; n];
+        for (&i, v) in first.iter().zip(self.engagements(&qs)) {
+            out[i] = v;
+        }
+        // 2. between anchors: exactly where the pixels are ambiguous, along the line elsewhere
+        let mut second: Vec<usize> = Vec::new();
+        let mut lines: Vec<(usize, usize)> = Vec::new();
+        for &(a, b) in &ends {
+            let mut lo = a;
+            while lo + 1 < b {
+                let hi = (lo + stride).min(b - 1);
+                if hi > lo + 1 {
+                    let (pa, pb) = (pixel[lo] as f64, pixel[hi] as f64);
+                    let span = (hi - lo) as f64;
+                    let smooth = (lo + 1..hi).all(|i| {
+                        let t = (i - lo) as f64 / span;
+                        (pixel[i] as f64 - (pa + t * (pb - pa))).abs() <= GUIDE_SMOOTH_DEG
+                    });
+                    let agree = (out[lo] - pa).abs() <= GUIDE_AGREE_DEG && (out[hi] - pb).abs() <= GUIDE_AGREE_DEG;
+                    if smooth && agree {
+                        lines.push((lo, hi));
+                    } else {
+                        second.extend(lo + 1..hi);
+                    }
+                }
+                lo = hi;
+            }
+        }
+        let qs: Vec<Query> = second.iter().map(|&i| queries[i]).collect();
+        for (&i, v) in second.iter().zip(self.engagements(&qs)) {
+            out[i] = v;
+        }
+        for (lo, hi) in lines {
+            let (ea, eb) = (out[lo], out[hi]);
+            let span = (hi - lo) as f64;
+            for (i, v) in out[lo + 1..hi].iter_mut().enumerate() {
+                let t = (i + 1) as f64 / span;
+                *v = ea + t * (eb - ea);
+            }
+        }
+        out
+    }
+
     /// The number of primitives recorded so far (a [`Query::upto`]).
     pub fn recorded(&self) -> u32 {
         self.prims.len() as u32
@@ -241,8 +375,11 @@ impl ExactModel {
             return 0.0;
         }
         // 2. intervals covered by cuts at or below this level: the primitives recorded before
-        // the query, of the cells the ring's box meets, each once
+        // the query, of the cells the ring's box meets, each once, newest first (the newest
+        // cover most of what will be covered, and each of the others is then first tested
+        // against the arcs still uncovered: one that cannot reach any of them adds nothing)
         sc.covered.clear();
+        sc.cand.clear();
         sc.next_query(upto as usize);
         let rr = self.r;
         let zq = z + eps;
@@ -266,16 +403,30 @@ impl ExactModel {
                         if v.dot(ring.u) + hr < 0.0 || v.length() - hr > rho {
                             continue;
                         }
-                        covered_intervals(&p.path, &p.fast, rr, &ring, &mut sc.angles, &mut sc.covered);
+                        sc.cand.push(id);
                     }
                 }
             }
         }
+        sc.cand.sort_unstable_by(|a, b| b.cmp(a));
         if let Some(cur) = &current {
             covered_intervals(cur, &Fast::new(cur), rr, &ring, &mut sc.angles, &mut sc.covered);
         }
+        if !sc.gaps(&ring) {
+            return 0.0;
+        }
+        for i in 0..sc.cand.len() {
+            let p = &self.prims[sc.cand[i] as usize];
+            if sc.disks.iter().all(|&(mc, h)| p.fast.distance(mc) > rr + h + 1e-9) {
+                continue;
+            }
+            let n0 = sc.covered.len();
+            covered_intervals(&p.path, &p.fast, rr, &ring, &mut sc.angles, &mut sc.covered);
+            if sc.covered.len() > n0 && !sc.gaps(&ring) {
+                return 0.0;
+            }
+        }
         // 3. measure base minus covered (the angle of a key t is 2 atan t)
-        sc.covered.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut total = 0.0;
         let mut open = |a: f64, b: f64| total += 2.0 * (b.atan() - a.atan());
         for &(a, b) in &sc.base {
@@ -579,5 +730,108 @@ mod tests {
         assert!((tea - 180.0).abs() < 0.01, "{tea}");
         let tea = m.engagement(DVec2::ZERO, -1.0, DVec2::X, 3.0001, 0.01, Some(&cur));
         assert!(tea < 1.0, "{tea}");
+    }
+
+    /// A model cut by random lines and arcs, and queries among them: seeded, so the same each
+    /// run.
+    fn random_cuts(seed: u64) -> (ExactModel, Vec<Query>, Vec<Path>, Vec<usize>) {
+        let r = 3.0;
+        let mut m = model(r);
+        let mut x = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        let mut next = move || {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((x >> 11) as f64) / ((1u64 << 53) as f64)
+        };
+        // the moves, and per query the number of them cut before it
+        let (mut queries, mut moves, mut before) = (Vec::new(), Vec::new(), Vec::new());
+        let mut at = DVec3::new(0.0, 0.0, -1.0);
+        for _ in 0..100 {
+            let to = DVec3::new(at.x + 8.0 * (next() - 0.5), at.y + 8.0 * (next() - 0.5), -1.0);
+            let to = DVec3::new(to.x.clamp(-30.0, 30.0), to.y.clamp(-30.0, 30.0), -1.0);
+            let path = if next() < 0.4 && (to - at).length() > 0.5 {
+                // an arc through the two points, its centre off the chord
+                let mid = 0.5 * (at + to).truncate();
+                let n = (to - at).truncate().perp().normalize();
+                let center = mid + n * (2.0 * next() - 1.0) * 4.0;
+                Path::Arc(crate::toolpath::ArcGeom::new(at, to, center, next() < 0.5))
+            } else {
+                Path::Line { a: at, b: to }
+            };
+            for k in 1..=4 {
+                let t = k as f64 / 4.0;
+                let dir = path.dir(t);
+                if dir.length_squared() < 1e-12 {
+                    continue;
+                }
+                queries.push(Query {
+                    c: path.at(t).truncate(),
+                    z: -1.0,
+                    dir,
+                    rho: r + 1e-4,
+                    eps: 0.01,
+                    current: Some(path.sub(0.0, t)),
+                    upto: m.recorded(),
+                });
+                before.push(moves.len());
+            }
+            m.add(&path);
+            moves.push(path);
+            at = to;
+        }
+        (m, queries, moves, before)
+    }
+
+    /// The measure (newest primitives first, the others tested against the arcs still
+    /// uncovered) agrees with a plain count of the ring's points outside every sweep.
+    #[test]
+    fn the_measure_agrees_with_counting_ring_points() {
+        for seed in 0..2 {
+            let (m, queries, moves, before) = random_cuts(seed);
+            let got = m.engagements(&queries);
+            let mut seen = 0usize;
+            for ((q, tea), &k) in queries.iter().zip(&got).zip(&before) {
+                let n = 3600;
+                let u = q.dir.normalize();
+                let cut: Vec<&Path> = moves[..k].iter().chain(q.current.as_ref()).collect();
+                let free = (0..n)
+                    .filter(|&k| {
+                        let th = (k as f64 + 0.5) / n as f64 * std::f64::consts::PI - std::f64::consts::FRAC_PI_2;
+                        let p = q.c + q.rho * (u * th.cos() + u.perp() * th.sin());
+                        cut.iter().all(|path| path.distance(p) > m.r)
+                    })
+                    .count();
+                let count = 180.0 * free as f64 / n as f64;
+                assert!((tea - count).abs() < 0.1, "seed {seed}: measured {tea}, counted {count}");
+                seen += (count > 1.0) as usize;
+            }
+            // (the cuts leave material round many of the queries: the test reads real arcs)
+            assert!(seen > queries.len() / 10, "{seen} of {}", queries.len());
+        }
+    }
+
+    /// Guided by pixel readings that agree with the geometry, the answers at the anchors are
+    /// the exact ones and those between them stay close; with a stride of 1 they are all exact.
+    #[test]
+    fn guided_answers_are_exact_at_anchors() {
+        let (m, queries, _, _) = random_cuts(7);
+        let exact = m.engagements(&queries);
+        let pixel: Vec<f32> = exact.iter().map(|&e| e as f32).collect();
+        let starts: Vec<usize> = (0..queries.len()).step_by(4).collect();
+        let all = m.engagements_guided(&queries, &pixel, &starts, 1);
+        assert_eq!(all, exact);
+        let guided = m.engagements_guided(&queries, &pixel, &starts, 2);
+        for (k, (g, e)) in guided.iter().zip(&exact).enumerate() {
+            if k % 4 == 1 {
+                // (between anchors 0 and 2 of a move: exact, or on the line when the pixels
+                // show the engagement straight there)
+                let line = 0.5 * (exact[k - 1] + exact[k + 1]);
+                assert!(g == e || ((g - line).abs() < 1e-9 && (e - line).abs() <= GUIDE_SMOOTH_DEG + 1e-6));
+            } else {
+                assert_eq!(g, e, "query {k} is an anchor");
+            }
+        }
+        // pixels that disagree with the geometry everywhere: every answer is measured
+        let wrong: Vec<f32> = exact.iter().map(|&e| e as f32 + 20.0).collect();
+        assert_eq!(m.engagements_guided(&queries, &wrong, &starts, 2), exact);
     }
 }

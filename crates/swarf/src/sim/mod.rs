@@ -126,12 +126,17 @@ pub struct SimOptions {
     /// The engine [`simulate`] replays a program with (the planner always uses the raster).
     /// For [`SimEngine::Sdf`], `res` is the sample spacing of the fields.
     pub engine: SimEngine,
+    /// Measure the exact engagement at every sample. Off, the raster engine measures it exactly
+    /// every `R/12` or so along a move and between those where the pixel reading is ambiguous,
+    /// and draws it along the line between them where the pixels show it changing smoothly
+    /// (about a fifth of the work, the same statistics to a tenth of a degree on the examples).
+    pub exact_every_sample: bool,
 }
 
 impl SimOptions {
     /// The cell size for the tool ([`SimOptions::res_for`]), 0.01 mm gouge tolerance and
     /// engagement threshold, samples every half cell, at most 60 million cells, the raster
-    /// engine.
+    /// engine, the exact engagement where the pixels leave it in doubt.
     pub const DEFAULT: SimOptions = SimOptions {
         res: None,
         tol: 0.01,
@@ -142,6 +147,7 @@ impl SimOptions {
         heights: None,
         sure_links: false,
         engine: SimEngine::Raster,
+        exact_every_sample: false,
     };
 
     /// Checks the settings: a positive cell size and sample step, tolerances of zero or more, a

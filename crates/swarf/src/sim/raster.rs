@@ -218,7 +218,13 @@ pub struct RasterSim {
     /// Exact engagement queries of the replay not answered yet, and the answers so far, in
     /// order ([`Engine::deferred`]).
     queries: Vec<Query>,
+    /// The pixel reading of each query, and where each move's queries start.
+    pixels: Vec<f32>,
+    starts: Vec<usize>,
     answers: Vec<f64>,
+    /// Every how many samples of a move the exact engagement is measured whatever the pixels
+    /// read (1: at every sample; see [`ExactModel::engagements_guided`]).
+    exact_stride: usize,
     keep: Area,
     keep_edges: EdgeIndex,
     part_top_eff: f64,
@@ -238,6 +244,9 @@ pub struct RasterSim {
     bmax: Vec<f32>,
     bcnt: Vec<u32>,
     nbx: usize,
+    /// Highest protected height per block (the part never changes): lets the gouge test skip
+    /// the blocks the tool passes high above the part.
+    pmax: Vec<f32>,
 }
 
 /// Side of the blocks of [`RasterSim::max_height_near`], cells.
@@ -330,7 +339,16 @@ impl RasterSim {
             circ,
             exact,
             queries: Vec::new(),
+            pixels: Vec::new(),
+            starts: Vec::new(),
             answers: Vec::new(),
+            exact_stride: if opts.exact_every_sample {
+                1
+            } else {
+                // anchors about R/12 apart: the engagement of a smooth cut changes little
+                // over that, and the pixels show where it does not
+                ((r / 12.0) / opts.sample_step.unwrap_or(res / 2.0)).round().clamp(1.0, 16.0) as usize
+            },
             keep: regions.keep.clone(),
             keep_edges,
             part_top_eff,
@@ -340,6 +358,7 @@ impl RasterSim {
             reach_left: 0,
             dirty: None,
             bmax: Vec::new(),
+            pmax: Vec::new(),
             bcnt: Vec::new(),
             nbx: 0,
         }
@@ -378,6 +397,15 @@ impl RasterSim {
         self.nbx = self.grid.nx.div_ceil(BLOCK);
         let nby = self.grid.ny.div_ceil(BLOCK);
         (self.bmax, self.bcnt) = (0..self.nbx * nby).into_par_iter().map(|b| self.block_max(b)).unzip();
+        self.pmax = (0..self.nbx * nby)
+            .map(|b| {
+                let (i0, i1, j0, j1) = self.block_cells(b);
+                (j0..=j1)
+                    .flat_map(|j| (i0..=i1).map(move |i| j * self.grid.nx + i))
+                    .map(|k| self.p[k])
+                    .fold(f32::NEG_INFINITY, f32::max)
+            })
+            .collect();
         self
     }
 
@@ -824,7 +852,17 @@ impl RasterSim {
         let zq = (z + self.eps) as f32;
         let mut hit = 0usize;
         let current = current.map(Fast::new);
-        for off in &self.circ {
+        // the points ahead: those within a quarter turn of the direction (the points stand
+        // at angles τ(k + ½)/n, so they are one run of indices, read with a point to spare at
+        // each end and the same test as a whole turn would make)
+        let n = self.circ.len();
+        let step = std::f64::consts::TAU / n as f64;
+        let mid = dir.y.atan2(dir.x) / step - 0.5;
+        let quarter = 0.25 * n as f64;
+        let (lo, hi) = ((mid - quarter).floor() as i64 - 1, (mid + quarter).ceil() as i64 + 1);
+        let (lo, hi) = if hi - lo + 1 >= n as i64 { (0, n as i64 - 1) } else { (lo, hi) };
+        for k in lo..=hi {
+            let off = &self.circ[k.rem_euclid(n as i64) as usize];
             if off.dot(dir) < 0.0 {
                 continue;
             }
@@ -841,6 +879,15 @@ impl RasterSim {
             hit += 1;
         }
         360.0 * hit as f64 / self.circ.len() as f64
+    }
+
+    /// Answers the exact engagement queries kept so far (see [`Engine::begin_move`]).
+    fn answer_queries(&mut self) {
+        let answers = self.exact.engagements_guided(&self.queries, &self.pixels, &self.starts, self.exact_stride);
+        self.answers.extend(answers);
+        self.queries.clear();
+        self.pixels.clear();
+        self.starts.clear();
     }
 
     /// Exact engagement (see [`ExactModel`]).
@@ -868,7 +915,7 @@ impl RasterSim {
         let rr = self.r - self.tol;
         let mut worst = 0.0f64;
         let mut at = path.at(0.0);
-        visit_above(&self.grid, &self.p, None, path, rr, self.tol, |k, q, z| {
+        visit_above(&self.grid, &self.p, Some((&self.pmax, self.nbx)), path, rr, self.tol, |k, q, z| {
             let d = self.p[k] as f64 - z;
             if d > worst {
                 worst = d;
@@ -1024,32 +1071,38 @@ impl super::replay::Engine for RasterSim {
         RasterSim::material_under(self, c, z)
     }
 
-    fn engagement(&mut self, p: DVec3, dir: DVec2, cur: &Path, before: &Path) -> (Option<f64>, f64) {
+    fn begin_move(&mut self) {
         // the exact measure reads only the cuts recorded so far, which stay as they are: the
-        // queries are answered in batches on every core (a batch bounds the memory they hold)
+        // queries are answered in batches of whole moves on every core (a batch bounds the
+        // memory they hold)
         if self.queries.len() >= QUERY_BATCH {
-            let answers = self.exact.engagements(&self.queries);
-            self.answers.extend(answers);
-            self.queries.clear();
+            self.answer_queries();
         }
+        self.starts.push(self.queries.len());
+    }
+
+    fn engagement(&mut self, p: DVec3, dir: DVec2, cur: &Path, before: &Path) -> (Option<f64>, f64) {
+        // A straight move sweeps nothing of the front half of a ring wider than the tool
+        // around its end (every point ahead lies farther than the ring's radius from the
+        // segment behind it), so only an arc's own sweep needs testing.
+        let arc = matches!(cur, Path::Arc(_));
+        let px = self.engagement_pixel(p.truncate(), p.z, dir, arc.then_some(before));
         self.queries.push(Query {
             c: p.truncate(),
             z: p.z,
             dir,
             rho: self.r + self.ring_delta,
             eps: self.eps,
-            current: Some(*cur),
+            current: arc.then_some(*cur),
             upto: self.exact.recorded(),
         });
-        (None, self.engagement_pixel(p.truncate(), p.z, dir, Some(before)))
+        self.pixels.push(px as f32);
+        (None, px)
     }
 
     fn deferred(&mut self) -> Vec<f64> {
-        let last = self.exact.engagements(&self.queries);
-        self.queries.clear();
-        let mut answers = std::mem::take(&mut self.answers);
-        answers.extend(last);
-        answers
+        self.answer_queries();
+        std::mem::take(&mut self.answers)
     }
 
     fn gouge_depth(&self, path: &Path) -> (f64, DVec3) {

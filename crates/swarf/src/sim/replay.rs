@@ -103,6 +103,9 @@ pub(crate) trait Engine {
     /// `before` up to the previous one. The engine's own measure may be left for later (`None`):
     /// [`Engine::deferred`] then gives it.
     fn engagement(&mut self, p: DVec3, dir: DVec2, cur: &Path, before: &Path) -> (Option<f64>, f64);
+    /// The samples of a cutting move follow (the engine may group its deferred measures by
+    /// move).
+    fn begin_move(&mut self) {}
     /// The engagements left for later, in the order they were asked.
     fn deferred(&mut self) -> Vec<f64> {
         Vec::new()
@@ -186,6 +189,9 @@ pub(crate) fn run<M: Engine>(m_: &mut M, tp: &Toolpath, progress: &mut dyn FnMut
                     SampleKind::Lateral
                 };
                 let step_len = len3 / n as f64;
+                if kind != SampleKind::Plunge {
+                    m_.begin_move();
+                }
                 for k in 1..=n {
                     let t = k as f64 / n as f64;
                     let p = path.at(t);

@@ -489,3 +489,60 @@ fn pixel_follows_exact_on_a_real_program() {
     eprintln!("pocket_islands: {:.1} % of samples within 5° between methods", 100.0 * share);
     assert!(share >= 0.9, "only {:.1} % of samples agree within 5°", 100.0 * share);
 }
+
+/// The exact engagement measured every R/12 and where the pixels leave it in doubt (the
+/// default) against measuring it at every sample, on example programs: the same samples and
+/// pixel readings, the figures the report judges by within half a degree, and nearly every
+/// sample within 3°.
+#[test]
+fn guided_exact_engagement_keeps_the_figures_of_every_sample() {
+    use swarf::report::Stats;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cases");
+    let mut bad = Vec::new();
+    for name in ["l_pocket", "boss_with_clamp", "narrow_slot"] {
+        let job = swarf::io::load_job(&dir.join(format!("{name}.json")), &Default::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let opts = RoughOptions { simulate: false, ..Default::default() };
+        let planned = swarf::job::rough::plan(&job, &opts).unwrap_or_else(|e| panic!("{e}")).expect("a program");
+        let run = |every| {
+            let sim = SimOptions { exact_every_sample: every, ..SimOptions::DEFAULT };
+            swarf::sim::simulate(&job, &planned.regions, &sim, &planned.toolpath, &mut |_| {})
+                .unwrap_or_else(|e| panic!("{e}"))
+                .0
+        };
+        let (all, guided) = (run(true), run(false));
+        assert_eq!(all.samples.len(), guided.samples.len(), "{name}");
+        let lateral = |rp: &Replay| {
+            Stats::of(
+                rp.samples.iter().filter(|s| s.kind == SampleKind::Lateral && !s.bore).map(|s| s.tea as f64).collect(),
+            )
+        };
+        let (a, g) = (lateral(&all), lateral(&guided));
+        for (what, x, y) in
+            [("max", a.max, g.max), ("p95", a.p95, g.p95), ("p50", a.p50, g.p50), ("mean", a.mean, g.mean)]
+        {
+            if (x - y).abs() > 0.5 {
+                bad.push(format!("{name}: {what} {x:.2}° at every sample, {y:.2}° guided"));
+            }
+        }
+        let mut off = 0;
+        for (s, t) in all.samples.iter().zip(&guided.samples) {
+            assert_eq!((s.tea_pixel, s.at), (t.tea_pixel, t.at), "{name}: the same samples");
+            off += ((s.tea - t.tea).abs() > 3.0) as usize;
+        }
+        eprintln!(
+            "{name}: max {:.2}/{:.2}, p95 {:.2}/{:.2}, mean {:.2}/{:.2}, {off} of {} samples off by more than 3°",
+            a.max,
+            g.max,
+            a.p95,
+            g.p95,
+            a.mean,
+            g.mean,
+            all.samples.len()
+        );
+        if off * 100 > all.samples.len() {
+            bad.push(format!("{name}: {off} of {} samples off by more than 3°", all.samples.len()));
+        }
+    }
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
