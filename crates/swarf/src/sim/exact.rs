@@ -23,6 +23,60 @@
 use super::sweep::{Fast, Path};
 use crate::geom::DVec2;
 
+/// What a replay tells the thread that keeps its exact model ([`serve`]), in the replay's order.
+#[derive(Debug, Clone, Copy)]
+pub enum ToExact {
+    /// A move was cut: record it.
+    Add(Path),
+    /// The samples of a cutting move follow.
+    Move,
+    /// The exact engagement of a sample (its [`Query::upto`] is filled in on arrival: the
+    /// primitives recorded by then), with its pixel reading.
+    Query(Query, f32),
+}
+
+/// Exact engagement queries answered together (a batch bounds the memory they hold).
+const QUERY_BATCH: usize = 1 << 14;
+
+/// Keeps `model` on a thread of its own while a replay runs on another: records the cuts and
+/// answers the queries it receives, in their order ([`ExactModel::engagements_guided`] with
+/// `stride`, a batch of whole moves at a time), until the replay drops its sender; then sends
+/// all the answers, in order, on `answers` and returns the model. The replay's cutting and
+/// pixel readings and the exact engagement then run side by side, with the same answers as
+/// one after the other.
+pub fn serve(
+    mut model: ExactModel,
+    messages: std::sync::mpsc::Receiver<Vec<ToExact>>,
+    answers: std::sync::mpsc::Sender<Vec<f64>>,
+    stride: usize,
+) -> ExactModel {
+    let (mut queries, mut pixels, mut starts, mut out) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for chunk in messages {
+        for m in chunk {
+            match m {
+                ToExact::Add(path) => model.add(&path),
+                ToExact::Move => {
+                    if queries.len() >= QUERY_BATCH {
+                        out.extend(model.engagements_guided(&queries, &pixels, &starts, stride));
+                        queries.clear();
+                        pixels.clear();
+                        starts.clear();
+                    }
+                    starts.push(queries.len());
+                }
+                ToExact::Query(q, px) => {
+                    queries.push(Query { upto: model.recorded(), ..q });
+                    pixels.push(px);
+                }
+            }
+        }
+    }
+    out.extend(model.engagements_guided(&queries, &pixels, &starts, stride));
+    // (the replay waits for them; it cannot have gone)
+    let _ = answers.send(out);
+    model
+}
+
 /// Largest departure, degrees, of a pixel reading from the line between its anchors' readings
 /// for [`ExactModel::engagements_guided`] to draw the exact engagement along that line.
 pub const GUIDE_SMOOTH_DEG: f64 = 3.0;

@@ -1,7 +1,7 @@
 //! The raster material model and the replay of a toolpath on it.
 
 use super::SimOptions;
-use super::exact::{ExactModel, Query};
+use super::exact::{ExactModel, Query, ToExact};
 use super::grid::{Grid, ceil_i, floor_i};
 use super::replay::{Replay, Rest};
 use super::sweep::{Fast, Path};
@@ -186,8 +186,42 @@ fn row_columns(grid: &Grid, st: Option<&Stadium>, j: usize, i0: usize, i1: usize
     (lo <= hi).then_some((lo as usize, hi as usize))
 }
 
-/// Exact engagement queries answered together during a replay (see [`Engine::deferred`]).
-const QUERY_BATCH: usize = 1 << 14;
+/// Messages the replay sends the exact model's thread at a time.
+const FEED_CHUNK: usize = 2048;
+
+/// The replay's side of the exact model's thread ([`super::exact::serve`]).
+#[derive(Debug)]
+struct ExactFeed {
+    tx: std::sync::mpsc::SyncSender<Vec<ToExact>>,
+    pending: Vec<ToExact>,
+    /// (in a mutex only so that the simulator stays shareable between threads)
+    answers: std::sync::Mutex<std::sync::mpsc::Receiver<Vec<f64>>>,
+}
+
+/// The feed of a replay in progress; a copy of the simulator has none.
+#[derive(Debug, Default)]
+struct FeedSlot(Option<ExactFeed>);
+
+impl Clone for FeedSlot {
+    fn clone(&self) -> Self {
+        FeedSlot(None)
+    }
+}
+
+impl ExactFeed {
+    fn send(&mut self, m: ToExact) {
+        self.pending.push(m);
+        if self.pending.len() >= FEED_CHUNK {
+            self.flush();
+        }
+    }
+
+    fn flush(&mut self) {
+        let chunk = std::mem::replace(&mut self.pending, Vec::with_capacity(FEED_CHUNK));
+        // (the thread ends only when this side is dropped, or by a panic the replay re-raises)
+        let _ = self.tx.send(chunk);
+    }
+}
 
 /// The raster simulator.
 #[derive(Debug, Clone)]
@@ -214,14 +248,12 @@ pub struct RasterSim {
     pub state: Vec<u8>,
     reach: Vec<bool>,
     circ: Vec<DVec2>,
+    /// The same offsets in cells.
+    circ_cells: Vec<DVec2>,
     exact: ExactModel,
-    /// Exact engagement queries of the replay not answered yet, and the answers so far, in
-    /// order ([`Engine::deferred`]).
-    queries: Vec<Query>,
-    /// The pixel reading of each query, and where each move's queries start.
-    pixels: Vec<f32>,
-    starts: Vec<usize>,
-    answers: Vec<f64>,
+    /// During a replay, the channel to the thread that holds the exact model (`exact` is then
+    /// an empty stand-in).
+    feed: FeedSlot,
     /// Every how many samples of a move the exact engagement is measured whatever the pixels
     /// read (1: at every sample; see [`ExactModel::engagements_guided`]).
     exact_stride: usize,
@@ -336,12 +368,10 @@ impl RasterSim {
             p,
             state: st,
             reach,
+            circ_cells: circ.iter().map(|o| *o / res).collect(),
             circ,
             exact,
-            queries: Vec::new(),
-            pixels: Vec::new(),
-            starts: Vec::new(),
-            answers: Vec::new(),
+            feed: FeedSlot::default(),
             exact_stride: if opts.exact_every_sample {
                 1
             } else {
@@ -609,7 +639,10 @@ impl RasterSim {
             }
         }
         if self.track_exact {
-            self.exact.add(path);
+            match &mut self.feed.0 {
+                Some(f) => f.send(ToExact::Add(*path)),
+                None => self.exact.add(path),
+            }
         }
     }
 
@@ -861,33 +894,32 @@ impl RasterSim {
         let quarter = 0.25 * n as f64;
         let (lo, hi) = ((mid - quarter).floor() as i64 - 1, (mid + quarter).ceil() as i64 + 1);
         let (lo, hi) = if hi - lo + 1 >= n as i64 { (0, n as i64 - 1) } else { (lo, hi) };
+        // the cell of a point, as `Grid::cell_of` finds it, from the centre's position in
+        // cells plus the point's offset in cells (no division per point)
+        let g = &self.grid;
+        let (fx0, fy0) = ((c.x - g.x0) / g.res, (c.y - g.y0) / g.res);
         for k in lo..=hi {
-            let off = &self.circ[k.rem_euclid(n as i64) as usize];
+            let k = k.rem_euclid(n as i64) as usize;
+            let off = self.circ[k];
             if off.dot(dir) < 0.0 {
                 continue;
             }
-            let q = c + *off;
-            let Some((i, j)) = self.grid.cell_of(q) else { continue };
-            if self.s[j * self.grid.nx + i] <= zq {
+            let (fx, fy) = (fx0 + self.circ_cells[k].x, fy0 + self.circ_cells[k].y);
+            if !(fx >= 0.0 && fy >= 0.0) {
+                continue;
+            }
+            let (i, j) = (fx as usize, fy as usize);
+            if i >= g.nx || j >= g.ny || self.s[j * g.nx + i] <= zq {
                 continue;
             }
             if let Some(p) = &current
-                && p.distance(q) <= self.r
+                && p.distance(c + off) <= self.r
             {
                 continue;
             }
             hit += 1;
         }
         360.0 * hit as f64 / self.circ.len() as f64
-    }
-
-    /// Answers the exact engagement queries kept so far (see [`Engine::begin_move`]).
-    fn answer_queries(&mut self) {
-        let answers = self.exact.engagements_guided(&self.queries, &self.pixels, &self.starts, self.exact_stride);
-        self.answers.extend(answers);
-        self.queries.clear();
-        self.pixels.clear();
-        self.starts.clear();
     }
 
     /// Exact engagement (see [`ExactModel`]).
@@ -948,8 +980,36 @@ impl RasterSim {
 
     /// Replays a toolpath: cuts it, samples engagement, finds gouges, collisions and plunges.
     /// `progress` is called with the fraction done.
+    ///
+    /// The exact model moves to a thread of its own for the replay ([`super::exact::serve`]):
+    /// it records the cuts and measures the exact engagement while this thread cuts the cells
+    /// and reads the pixels, with the same answers as one after the other.
     pub fn replay(&mut self, tp: &Toolpath, progress: &mut dyn FnMut(f64)) -> Replay {
-        super::replay::run(self, tp, progress)
+        let stand_in = ExactModel::new(self.r, DVec2::ZERO, DVec2::ONE, Vec::new(), 0.0, 1.0);
+        let model = std::mem::replace(&mut self.exact, stand_in);
+        let (tx, rx) = std::sync::mpsc::sync_channel(8);
+        let (answers_tx, answers) = std::sync::mpsc::channel();
+        let stride = self.exact_stride;
+        let (replayed, model) = std::thread::scope(|s| {
+            let worker = s.spawn(move || super::exact::serve(model, rx, answers_tx, stride));
+            self.feed.0 = Some(ExactFeed {
+                tx,
+                pending: Vec::with_capacity(FEED_CHUNK),
+                answers: std::sync::Mutex::new(answers),
+            });
+            let replayed =
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| super::replay::run(self, tp, progress)));
+            // (dropping the sender ends the thread, also after a panic)
+            self.feed.0 = None;
+            (replayed, worker.join())
+        });
+        match (replayed, model) {
+            (Ok(rp), Ok(model)) => {
+                self.exact = model;
+                rp
+            }
+            (Err(e), _) | (_, Err(e)) => std::panic::resume_unwind(e),
+        }
     }
 
     /// Cuts a whole move, a long one in pieces of at most four radii (keeps the cell windows
@@ -1072,13 +1132,9 @@ impl super::replay::Engine for RasterSim {
     }
 
     fn begin_move(&mut self) {
-        // the exact measure reads only the cuts recorded so far, which stay as they are: the
-        // queries are answered in batches of whole moves on every core (a batch bounds the
-        // memory they hold)
-        if self.queries.len() >= QUERY_BATCH {
-            self.answer_queries();
+        if let Some(f) = &mut self.feed.0 {
+            f.send(ToExact::Move);
         }
-        self.starts.push(self.queries.len());
     }
 
     fn engagement(&mut self, p: DVec3, dir: DVec2, cur: &Path, before: &Path) -> (Option<f64>, f64) {
@@ -1087,22 +1143,35 @@ impl super::replay::Engine for RasterSim {
         // segment behind it), so only an arc's own sweep needs testing.
         let arc = matches!(cur, Path::Arc(_));
         let px = self.engagement_pixel(p.truncate(), p.z, dir, arc.then_some(before));
-        self.queries.push(Query {
+        let q = Query {
             c: p.truncate(),
             z: p.z,
             dir,
             rho: self.r + self.ring_delta,
             eps: self.eps,
             current: arc.then_some(*cur),
-            upto: self.exact.recorded(),
-        });
-        self.pixels.push(px as f32);
-        (None, px)
+            upto: 0,
+        };
+        match &mut self.feed.0 {
+            // the exact model's thread measures it (the primitives recorded before it count)
+            Some(f) => {
+                f.send(ToExact::Query(q, px as f32));
+                (None, px)
+            }
+            None => {
+                let exact = self.exact.engagement(q.c, q.z, dir, q.rho, q.eps, q.current.as_ref());
+                (Some(exact), px)
+            }
+        }
     }
 
     fn deferred(&mut self) -> Vec<f64> {
-        self.answer_queries();
-        std::mem::take(&mut self.answers)
+        let Some(mut f) = self.feed.0.take() else { return Vec::new() };
+        f.flush();
+        let ExactFeed { tx, answers, .. } = f;
+        drop(tx);
+        let answers = answers.into_inner().unwrap_or_else(|e| e.into_inner());
+        answers.recv().expect("the exact model's thread answers")
     }
 
     fn gouge_depth(&self, path: &Path) -> (f64, DVec3) {
