@@ -124,6 +124,10 @@ struct CommonOpts {
     /// Cutting feed, mm/min.
     #[arg(long, value_name = "MM_PER_MIN", allow_negative_numbers = true)]
     feed: Option<f64>,
+    /// The machine's highest cutting feed, mm/min: the feed raised where the tool cuts little
+    /// (--feed-boost) stays under it.
+    #[arg(long, value_name = "MM_PER_MIN", allow_negative_numbers = true)]
+    max_feed: Option<f64>,
     /// Spindle speed, rpm.
     #[arg(long, value_name = "RPM", allow_negative_numbers = true)]
     spindle: Option<f64>,
@@ -153,9 +157,10 @@ struct CommonOpts {
     /// engagement (paper 1 §4.4), degrees.
     #[arg(long, value_name = "DEG", allow_negative_numbers = true)]
     overshoot: Option<f64>,
-    /// Adaptive: raise the feed where the engagement is low, by up to this factor (chip-thinning
-    /// compensation 1/sin θ, smoothed over a tool diameter; paper 1 §5). Medial: the feed of
-    /// the cut-back returns through cleared space (paper 2, conclusion). 1 = off.
+    /// Adaptive: raise the feed where the engagement is low, by up to this factor and never
+    /// above --max-feed (chip-thinning compensation 1/sin θ, which holds the programmed chip
+    /// thickness, smoothed over a tool diameter; paper 1 §5). Medial: the feed of the cut-back
+    /// returns through cleared space (paper 2, conclusion). 1 = off.
     #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
     feed_boost: Option<f64>,
     /// Links through cleared space as feed moves (G1 at the cutting feed times the feed boost)
@@ -341,6 +346,7 @@ fn flag(s: Setting) -> Option<&'static str> {
         Setting::Stepover => "--stepover",
         Setting::Engagement => "--engagement",
         Setting::Feed => "--feed",
+        Setting::MaxFeed => "--max-feed",
         Setting::SpindleSpeed => "--spindle",
         Setting::Stepdown => "--stepdown",
         Setting::Depth => "--depth",
@@ -395,6 +401,7 @@ fn library_defaults() -> Vec<(&'static str, &'static str, String)> {
             (cmd, "depth", num(Overrides::DEFAULT_DEPTH)),
             (cmd, "feed", format!("{} for drawings and STL parts", num(swarf::model::Cutting::DEFAULT.feed))),
             (cmd, "spindle", format!("{} for drawings and STL parts", num(swarf::model::Cutting::DEFAULT.spindle_rpm))),
+            (cmd, "max_feed", "the rapid rate".to_string()),
             (cmd, "post", Post::DEFAULT.name().to_string()),
             (cmd, "order", order_name(swarf::strategy::OffsetOptions::DEFAULT.order).to_string()),
             (cmd, "angle", num(swarf::strategy::ZigzagOptions::DEFAULT.angle_deg)),
@@ -519,6 +526,7 @@ fn overrides(o: &CommonOpts) -> Result<Overrides, Failure> {
         stepdown: o.stepdown,
         depth: o.depth,
         feed: o.feed,
+        max_feed: o.max_feed,
         spindle_rpm: o.spindle,
         ..placement(&o.place)?
     };

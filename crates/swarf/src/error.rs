@@ -100,6 +100,8 @@ pub enum Setting {
     Feed,
     /// `cutting.rapid_rate`: the rapid rate for time estimates, mm/min.
     RapidRate,
+    /// `cutting.max_feed`: the machine's highest cutting feed, mm/min.
+    MaxFeed,
     /// `cutting.spindle_rpm`: the spindle speed, rpm.
     SpindleSpeed,
     /// `stepdown`: the largest depth of a level, mm.
@@ -186,6 +188,7 @@ impl Setting {
             Setting::Engagement => "width.engagement_deg",
             Setting::Feed => "cutting.feed",
             Setting::RapidRate => "cutting.rapid_rate",
+            Setting::MaxFeed => "cutting.max_feed",
             Setting::SpindleSpeed => "cutting.spindle_rpm",
             Setting::Stepdown => "stepdown",
             Setting::Floor => "floor",

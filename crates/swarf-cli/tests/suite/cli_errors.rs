@@ -254,6 +254,7 @@ fn other_bad_numbers() {
     expect_failure(&d, &c, &["--stock-to-leave", "-0.5"], 2, &["--stock-to-leave", "positive"]);
     expect_failure(&d, &c, &["--angle", "NaN"], 2, &["--angle", "number"]);
     expect_failure(&d, &c, &["--feed-boost", "0.5"], 2, &["--feed-boost", "[1, 3]"]);
+    expect_failure(&d, &c, &["--max-feed", "300"], 2, &["--max-feed", "no lower than the feed"]);
     expect_failure(&d, &c, &["--overshoot", "-5"], 2, &["--overshoot", "[0°, 90°]"]);
 }
 

@@ -225,11 +225,12 @@ fn common(cx: &Ctx, root: &Value) -> Result<Common> {
     let feed = cx.opt_num(root, "feed_default")?.map_or(d.feed, |v| v * scale);
     let rapid_rate = cx.opt_num(root, "rapid_rate")?.map_or(d.rapid_rate, |v| v * scale);
     let spindle_rpm = cx.opt_num(root, "spindle_rpm")?.unwrap_or(d.spindle_rpm);
+    let max_feed = cx.opt_num(root, "max_feed")?.map(|v| v * scale).or(d.max_feed);
     let mut tool = Tool::flat(diameter);
     if let Some(n) = tool_number(tool_num_value(root)) {
         tool.number = n;
     }
-    let cutting = Cutting { tool, width, feed, rapid_rate, spindle_rpm };
+    let cutting = Cutting { tool, width, feed, rapid_rate, max_feed, spindle_rpm };
     // (each value where the file gives it: a bad one is the file's error, named by its key)
     cutting.validate().map_err(|e| cx.in_file(e))?;
     if let Some(sd) = stepdown
@@ -319,6 +320,7 @@ fn key_of(setting: Setting) -> &'static str {
         Setting::Engagement => "engagement_deg",
         Setting::Feed => "feed_default",
         Setting::RapidRate => "rapid_rate",
+        Setting::MaxFeed => "max_feed",
         Setting::SpindleSpeed => "spindle_rpm",
         Setting::Stepdown => "stepdown",
         Setting::Floor => "floor",

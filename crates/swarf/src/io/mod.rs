@@ -25,6 +25,8 @@ pub struct Overrides {
     pub depth: Option<f64>,
     /// Feed, mm/min.
     pub feed: Option<f64>,
+    /// The machine's highest cutting feed, mm/min.
+    pub max_feed: Option<f64>,
     /// Spindle speed, rpm.
     pub spindle_rpm: Option<f64>,
     /// Stock to leave on walls, mm.
@@ -49,6 +51,7 @@ impl Overrides {
         stepdown: None,
         depth: None,
         feed: None,
+        max_feed: None,
         spindle_rpm: None,
         allowance: None,
         import: swarf_import::ImportOptions::DEFAULT,
@@ -105,7 +108,8 @@ impl Overrides {
         Ok(())
     }
 
-    /// Applies the overrides of the cutting data: tool diameter, width of cut, feed, spindle.
+    /// Applies the overrides of the cutting data: tool diameter, width of cut, feed, highest
+    /// feed, spindle.
     pub fn apply_to_cutting(&self, c: &mut Cutting) {
         if let Some(d) = self.tool_diameter {
             c.tool.diameter = d;
@@ -115,6 +119,9 @@ impl Overrides {
         }
         if let Some(f) = self.feed {
             c.feed = f;
+        }
+        if let Some(m) = self.max_feed {
+            c.max_feed = Some(m);
         }
         if let Some(s) = self.spindle_rpm {
             c.spindle_rpm = s;

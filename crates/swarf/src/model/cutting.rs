@@ -95,6 +95,9 @@ pub struct Cutting {
     pub feed: f64,
     /// Rapid rate for the time estimates, mm/min.
     pub rapid_rate: f64,
+    /// The machine's highest cutting feed, mm/min: the feed raised where the tool cuts little
+    /// (chip thinning, paper 1 §5) never goes above it. `None`: the rapid rate.
+    pub max_feed: Option<f64>,
     /// Spindle speed, rpm.
     pub spindle_rpm: f64,
 }
@@ -102,9 +105,15 @@ pub struct Cutting {
 impl Cutting {
     /// swarf's cutting data for what an input does not say: [`Tool::DEFAULT`] (Ø6 mm),
     /// [`Width::DEFAULT`] (40 %), 1000 mm/min feed, 5000 mm/min rapids for the time estimates,
-    /// 10 000 rpm.
-    pub const DEFAULT: Cutting =
-        Cutting { tool: Tool::DEFAULT, width: Width::DEFAULT, feed: 1000.0, rapid_rate: 5000.0, spindle_rpm: 10000.0 };
+    /// the machine's highest feed at its rapid rate, 10 000 rpm.
+    pub const DEFAULT: Cutting = Cutting {
+        tool: Tool::DEFAULT,
+        width: Width::DEFAULT,
+        feed: 1000.0,
+        rapid_rate: 5000.0,
+        max_feed: None,
+        spindle_rpm: 10000.0,
+    };
 
     /// The default cutting data with a flat end mill of `diameter`.
     pub const fn with_tool_diameter(diameter: f64) -> Cutting {
@@ -130,7 +139,27 @@ impl Cutting {
                 return Err(Error::setting(setting, format!("{v} {what}")));
             }
         }
+        if let Some(m) = self.max_feed
+            && !(m.is_finite() && m >= self.feed)
+        {
+            return Err(Error::setting(
+                Setting::MaxFeed,
+                format!("{m} mm/min: the highest feed must be a number no lower than the feed ({} mm/min)", self.feed),
+            ));
+        }
         Ok(())
+    }
+
+    /// The machine's highest cutting feed, mm/min ([`Cutting::max_feed`], the rapid rate when
+    /// it is not given).
+    pub fn max_feed(&self) -> f64 {
+        self.max_feed.unwrap_or(self.rapid_rate)
+    }
+
+    /// How far a feed boost of `boost` may raise the feed of this cutting data: `boost`, down
+    /// to what keeps the feed within the machine's highest, and at least 1.
+    pub fn boost_within(&self, boost: f64) -> f64 {
+        boost.min(self.max_feed() / self.feed).max(1.0)
     }
 }
 
@@ -157,6 +186,15 @@ mod tests {
         assert_eq!(bad(Cutting { feed: f64::NAN, ..Cutting::DEFAULT }), Setting::Feed);
         assert_eq!(bad(Cutting { rapid_rate: 0.0, ..Cutting::DEFAULT }), Setting::RapidRate);
         assert_eq!(bad(Cutting { spindle_rpm: -5.0, ..Cutting::DEFAULT }), Setting::SpindleSpeed);
+        assert_eq!(bad(Cutting { max_feed: Some(500.0), ..Cutting::DEFAULT }), Setting::MaxFeed);
+        assert_eq!(bad(Cutting { max_feed: Some(f64::INFINITY), ..Cutting::DEFAULT }), Setting::MaxFeed);
+        // the boost stays under the machine's highest feed, the rapid rate by default
+        assert_eq!(Cutting::DEFAULT.boost_within(3.0), 3.0);
+        assert_eq!(Cutting { max_feed: Some(1500.0), ..Cutting::DEFAULT }.boost_within(3.0), 1.5);
+        assert_eq!(
+            Cutting { rapid_rate: 800.0, max_feed: None, feed: 1000.0, ..Cutting::DEFAULT }.boost_within(3.0),
+            1.0
+        );
     }
 
     #[test]

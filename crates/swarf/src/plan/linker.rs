@@ -104,6 +104,12 @@ impl<'a> Linker<'a> {
 }
 
 impl<'a, M: Material> Linker<'a, M> {
+    /// The feed boost of the links' options within the machine's highest feed (see
+    /// [`crate::model::Cutting::max_feed`]).
+    pub(crate) fn boost(&self) -> f64 {
+        self.link.feed_boost.min(self.job.cutting.max_feed() / self.feed).max(1.0)
+    }
+
     /// A linker on the material model `sim`, the tool at the safe height above `first`.
     pub(crate) fn with_model(job: &'a Job, link: &'a LinkOptions, sim: M, first: DVec2) -> Self {
         let safe_z = job.top() + link.clearance;
@@ -331,7 +337,7 @@ impl<'a, M: Material> Linker<'a, M> {
             let len = (to - a).length();
             if t > 0.0 {
                 let m = if len > 1e-12 { a + (to - a) * (t / len) } else { to };
-                self.push_line(MoveKind::Link, m.extend(z), self.feed * self.link.feed_boost);
+                self.push_line(MoveKind::Link, m.extend(z), self.feed * self.boost());
             }
             if t < len {
                 self.push_line(MoveKind::Rapid, to.extend(z), 0.0);
@@ -343,7 +349,7 @@ impl<'a, M: Material> Linker<'a, M> {
             self.push_line(MoveKind::Rapid, to.extend(lift), 0.0);
             self.push_line(MoveKind::Descend, to.extend(z), self.feed);
         } else {
-            self.push_line(MoveKind::Link, to.extend(z), self.feed * self.link.feed_boost);
+            self.push_line(MoveKind::Link, to.extend(z), self.feed * self.boost());
         }
     }
 
@@ -874,7 +880,7 @@ mod tests {
         );
         let link = &l.tp.moves[before..before + 2];
         assert_eq!(link[0].kind, MoveKind::Link, "{link:?}");
-        assert_eq!(link[0].feed, l.feed * l.link.feed_boost);
+        assert_eq!(link[0].feed, l.feed * l.boost());
         let fed = (link[0].to.truncate() - a).length();
         assert!(fed > 0.2 && fed < 0.35, "fed for {fed} mm");
         assert_eq!((link[1].kind, link[1].to), (MoveKind::Rapid, b.extend(z)));

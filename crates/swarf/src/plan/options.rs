@@ -33,10 +33,11 @@ pub struct LinkOptions {
     /// 3° ramp the tool descends at 5 % of it; FreeCAD's Adaptive and most CAM systems ramp at
     /// the cutting feed).
     pub ramp_feed_frac: f64,
-    /// How far the feed may rise where the tool cuts little, in [1, 3] (1 = off): links through
+    /// How far the feed may rise where the tool cuts little, in [1, 3] (1 = off), and never
+    /// above the machine's highest feed ([`crate::model::Cutting::max_feed`]): links through
     /// cleared space at depth run at the feed times this; the adaptive strategy raises its feed
-    /// where the engagement is low (chip thinning, paper 1 §5) up to it; the medial strategy's
-    /// cut-back returns run at it (paper 2).
+    /// where the engagement is low (chip thinning, paper 1 §5: the programmed chip thickness
+    /// held) up to it; the medial strategy's cut-back returns run at it (paper 2).
     pub feed_boost: f64,
     /// Links through cleared space at depth as feed moves (G1 at the cutting feed, times the
     /// feed boost; lifted rapids when long) instead of rapids at depth (G0): for controls whose
@@ -47,7 +48,8 @@ pub struct LinkOptions {
 impl LinkOptions {
     /// swarf's defaults: climb milling, no stock left and no finishing contour, 3° ramps and
     /// helices of 0.1–0.75 R, 2 µm arc fitting, 5 mm clearance, entries from 1 mm above the
-    /// material, plunges at half the feed, ramps at the feed, no feed boost, rapid links.
+    /// material, plunges at half the feed, ramps at the feed, the feed raised up to 3× where the
+    /// tool cuts little, rapid links.
     pub const DEFAULT: LinkOptions = LinkOptions {
         climb: true,
         stock_to_leave: 0.0,
@@ -60,7 +62,7 @@ impl LinkOptions {
         approach: 1.0,
         entry_feed_frac: 0.5,
         ramp_feed_frac: 1.0,
-        feed_boost: 1.0,
+        feed_boost: 3.0,
         feed_links: false,
     };
 

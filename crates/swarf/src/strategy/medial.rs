@@ -523,7 +523,7 @@ fn cut_run(l: &mut Linker, run: &Run, z: f64, step: f64, cut_backs: bool) {
                     let turn = Path::Line { a: q.c.extend(z), b: q.c.extend(z) };
                     let bridge = Path::Line { a: on(&q, a2).extend(z), b: on(nk, a2).extend(z) };
                     let air = l.sim.is_clear(&turn, q.rho + 0.05) && l.sim.is_clear(&bridge, 0.05);
-                    let feed = if air { l.feed * l.link.feed_boost } else { l.feed };
+                    let feed = if air { l.feed * l.boost() } else { l.feed };
                     arc_at(l, &q, a_e, sweep(a_e, a2, s), s, z, feed);
                     l.push_line(MoveKind::Cut, on(nk, a2).extend(z), feed);
                     a_in = a2;

@@ -52,3 +52,30 @@ fn adaptive_links_stay_low_and_mostly_down() {
     }
     assert!(lifts <= 15, "{lifts} lifts off the floor");
 }
+
+/// The engagement-driven feed (paper 1 §5) is on by default: the adaptive program's cuts run
+/// above the programmed feed where the tool cuts little, never above the machine's highest
+/// feed (the rapid rate unless the job says), and at most the feed times the boost; with the
+/// boost at 1 no cut runs above the feed.
+#[test]
+fn the_raised_feed_stays_under_the_machines_highest() {
+    let case = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cases/l_pocket.json");
+    let job = swarf::io::load_job(&case, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
+    let feeds = |job: &swarf::model::Job, boost: f64| {
+        let mut opts = RoughOptions { simulate: false, ..RoughOptions::DEFAULT };
+        opts.link.feed_boost = boost;
+        let out = rough(job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{e}"));
+        out.toolpath.moves.iter().filter(|m| m.kind == MoveKind::Cut).map(|m| m.feed).collect::<Vec<f64>>()
+    };
+    let f = job.cutting.feed;
+    let by_default = feeds(&job, RoughOptions::DEFAULT.link.feed_boost);
+    let top = by_default.iter().copied().fold(0.0, f64::max);
+    assert!(top > 1.5 * f && top <= job.cutting.rapid_rate.min(3.0 * f) + 1e-9, "highest feed {top}");
+    let capped = swarf::model::Job {
+        cutting: swarf::model::Cutting { max_feed: Some(1.4 * f), ..job.cutting.clone() },
+        ..job.clone()
+    };
+    let top = feeds(&capped, 3.0).iter().copied().fold(0.0, f64::max);
+    assert!(top > f && top <= 1.4 * f + 1e-9, "highest feed {top} with the machine's at {}", 1.4 * f);
+    assert!(feeds(&job, 1.0).iter().all(|&x| x <= f + 1e-9), "no boost, no cut above the feed");
+}

@@ -58,6 +58,7 @@ fn bad_job_values_name_their_setting() {
         ("feed −1", Box::new(|j| j.cutting.feed = -1.0), Setting::Feed),
         ("rapid rate NaN", Box::new(|j| j.cutting.rapid_rate = f64::NAN), Setting::RapidRate),
         ("spindle 0", Box::new(|j| j.cutting.spindle_rpm = 0.0), Setting::SpindleSpeed),
+        ("highest feed under the feed", Box::new(|j| j.cutting.max_feed = Some(500.0)), Setting::MaxFeed),
         ("step-down 0", Box::new(|j| j.stepdown = Some(0.0)), Setting::Stepdown),
         ("floor above the top", Box::new(|j| j.floor = 1.0), Setting::Floor),
         ("stock top inf", Box::new(|j| j.stock_top = f64::INFINITY), Setting::StockTop),

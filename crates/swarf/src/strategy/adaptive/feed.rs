@@ -19,7 +19,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         // the material model was cut step by step: do not cut it again
         self.l.precut = true;
         let base = self.l.feed;
-        let (res, d, boost) = (self.l.sim.grid().res, self.l.job.cutting.tool.diameter, self.l.link.feed_boost);
+        let (res, d, boost) = (self.l.sim.grid().res, self.l.job.cutting.tool.diameter, self.l.boost());
         for (run, m) in feed_runs(pts, rem, res, self.c.r, d, boost) {
             let simple = douglas_peucker(&run, DP_TOL);
             self.l.fit_emit_feed(&simple, z, MoveKind::Cut, base * m);
