@@ -125,7 +125,7 @@ pub fn read_case(path: &Path) -> Result<Job> {
 /// `part_stl`) is refused: read it with [`parse_input`].
 pub fn parse_case(path: &Path, bytes: &[u8]) -> Result<Job> {
     match parse_input(path, bytes)? {
-        Input::Flat(job) => Ok(job),
+        Input::Flat(job) => Ok(*job),
         Input::Mesh(_) => {
             Err(Error::input(path, "stock_box", "a 3D case (stock_box / part_stl): this reader takes 2.5D cases only"))
         }
@@ -192,7 +192,7 @@ pub fn parse_input(path: &Path, bytes: &[u8]) -> Result<Input> {
     let job =
         Job { name, stock, stock_top, part, part_top, fixtures, floor, allowance, allowance_floor, stepdown, cutting };
     job.validate().map_err(|e| cx.in_file(e))?;
-    Ok(Input::Flat(job))
+    Ok(Input::Flat(Box::new(job)))
 }
 
 /// What 2.5D and 3D cases share: the cutting data, allowances and step-down.

@@ -162,7 +162,7 @@ impl Default for Overrides {
 #[derive(Debug, Clone)]
 pub enum Input {
     /// Stock and part outlines.
-    Flat(Job),
+    Flat(Box<Job>),
     /// A mesh part in a stock box.
     Mesh(Box<MeshJob>),
 }
@@ -179,7 +179,7 @@ pub fn example_job() -> Job {
 /// Reads a 2.5D case (`.json`), DXF or SVG file into a job, applies the overrides and validates it.
 pub fn load_job(path: &Path, ov: &Overrides) -> Result<Job> {
     match load_input(path, ov)? {
-        Input::Flat(job) => Ok(job),
+        Input::Flat(job) => Ok(*job),
         Input::Mesh(_) => Err(Error::input(path, "file", "a 3D job (a mesh part): this reads 2.5D jobs only")),
     }
 }
@@ -229,7 +229,7 @@ pub fn load_input(path: &Path, ov: &Overrides) -> Result<Input> {
     } else if is_case {
         case::read_input(path)?
     } else {
-        Input::Flat(drawing::job_from_drawing(&swarf_import::read_drawing(path, &ov.import)?, ov)?)
+        Input::Flat(Box::new(drawing::job_from_drawing(&swarf_import::read_drawing(path, &ov.import)?, ov)?))
     };
     Ok(match input {
         Input::Flat(mut job) => {
