@@ -159,31 +159,11 @@ impl Scratch {
         }
         self.covered.truncate(w);
         self.disks.clear();
-        let mut disk = |a: f64, b: f64| {
+        let disks = &mut self.disks;
+        uncovered(&self.base, &self.covered, |a, b| {
             let (pa, pb) = (ring.point(a), ring.point(b));
-            self.disks.push((0.5 * (pa + pb), 0.5 * (pb - pa).length()));
-        };
-        for &(a, b) in &self.base {
-            let mut cur = a;
-            for &(ca, cb) in &self.covered {
-                if cb <= cur {
-                    continue;
-                }
-                if ca >= b {
-                    break;
-                }
-                if ca > cur {
-                    disk(cur, ca);
-                }
-                cur = cur.max(cb);
-                if cur >= b {
-                    break;
-                }
-            }
-            if cur < b {
-                disk(cur, b);
-            }
-        }
+            disks.push((0.5 * (pa + pb), 0.5 * (pb - pa).length()));
+        });
         !self.disks.is_empty()
     }
 
@@ -482,28 +462,7 @@ impl ExactModel {
         }
         // 3. measure base minus covered (the angle of a key t is 2 atan t)
         let mut total = 0.0;
-        let mut open = |a: f64, b: f64| total += 2.0 * (b.atan() - a.atan());
-        for &(a, b) in &sc.base {
-            let mut cur = a;
-            for &(ca, cb) in &sc.covered {
-                if cb <= cur {
-                    continue;
-                }
-                if ca >= b {
-                    break;
-                }
-                if ca > cur {
-                    open(cur, ca);
-                }
-                cur = cur.max(cb);
-                if cur >= b {
-                    break;
-                }
-            }
-            if cur < b {
-                open(cur, b);
-            }
-        }
+        uncovered(&sc.base, &sc.covered, |a, b| total += 2.0 * (b.atan() - a.atan()));
         total.to_degrees()
     }
 
@@ -531,6 +490,32 @@ impl ExactModel {
     /// True when nothing was cut yet.
     pub fn is_empty(&self) -> bool {
         self.prims.is_empty()
+    }
+}
+
+/// Calls `f(a, b)` for each piece of the intervals `base` (sorted, disjoint) that none of
+/// `covered` (sorted by start) covers, in order.
+fn uncovered(base: &[(f64, f64)], covered: &[(f64, f64)], mut f: impl FnMut(f64, f64)) {
+    for &(a, b) in base {
+        let mut cur = a;
+        for &(ca, cb) in covered {
+            if cb <= cur {
+                continue;
+            }
+            if ca >= b {
+                break;
+            }
+            if ca > cur {
+                f(cur, ca);
+            }
+            cur = cur.max(cb);
+            if cur >= b {
+                break;
+            }
+        }
+        if cur < b {
+            f(cur, b);
+        }
     }
 }
 
