@@ -539,19 +539,7 @@ fn plan_programs_linuxcnc() {
                "feed_per_tooth": 0.02, "cutting_speed_m_min": 60, "price": 40, "life_min": 45}]}"#,
     );
     let out = dir.path().join("out");
-    let run = Command::new(env!("CARGO_BIN_EXE_swarf"))
-        .arg("plan")
-        .arg(&case)
-        .arg("--tools")
-        .arg(&tools)
-        .arg("--output-dir")
-        .arg(&out)
-        .arg("--quiet")
-        .output()
-        .expect("run swarf");
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).expect("report")).expect("json");
+    let report = common::plan_report(&case, &tools, &out);
     assert_eq!(report["candidates"], 4);
     let programs = report["best"]["programs"].as_array().expect("programs");
     assert!(!programs.is_empty());

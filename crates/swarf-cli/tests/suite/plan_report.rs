@@ -3,7 +3,6 @@
 //! collisions, plunges and the rest material after it.
 
 use std::path::Path;
-use std::process::Command;
 
 use crate::common;
 use common::TempDir;
@@ -30,19 +29,7 @@ fn plan_report_gives_each_programs_replay() {
         serde_json::to_string(&serde_json::json!({"machine": table["machine"], "tools": tools})).expect("json"),
     );
     let out = dir.path().join("out");
-    let run = Command::new(env!("CARGO_BIN_EXE_swarf"))
-        .arg("plan")
-        .arg(root.join("examples/3d/bowl_cavity.json"))
-        .arg("--tools")
-        .arg(&db)
-        .arg("--output-dir")
-        .arg(&out)
-        .arg("--quiet")
-        .output()
-        .expect("run swarf");
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).expect("report")).expect("json");
+    let report = common::plan_report(&root.join("examples/3d/bowl_cavity.json"), &db, &out);
     assert!(report["simulate_s"].as_f64().expect("simulate_s") > 0.0);
     let programs = report["best"]["programs"].as_array().expect("programs");
     assert_eq!(programs.len(), 3, "the three tools are the cheapest sequence: {:?}", report["best"]["tools"]);

@@ -53,3 +53,20 @@ impl Drop for TempDir {
         }
     }
 }
+
+/// Runs `swarf plan CASE --tools TOOLS --output-dir OUT --quiet`, asserts it succeeds, and
+/// returns its `plan.json`.
+pub fn plan_report(case: &Path, tools: &Path, out: &Path) -> serde_json::Value {
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_swarf"))
+        .arg("plan")
+        .arg(case)
+        .arg("--tools")
+        .arg(tools)
+        .arg("--output-dir")
+        .arg(out)
+        .arg("--quiet")
+        .output()
+        .expect("run swarf");
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).expect("report")).expect("json")
+}
