@@ -354,13 +354,14 @@ impl RasterSim {
         let hi_g = lo_g + DVec2::new(grid.nx as f64, grid.ny as f64) * res;
         let exact = ExactModel::new(r, lo_g, hi_g, stock_rings, job.stock_top, 0.05);
         let keep_edges = EdgeIndex::from_area(&regions.keep, (2.0 * r).max(1.0));
+        let sample_step = opts.sample_step.unwrap_or(res / 2.0);
         Ok(Self {
             grid,
             r,
             tol: opts.tol,
             eps: opts.eps,
             ring_delta: opts.ring_delta,
-            sample_step: opts.sample_step.unwrap_or(res / 2.0),
+            sample_step,
             s: s0.clone(),
             sure: if opts.sure_links { s0.clone() } else { Vec::new() },
             half_diag: res * std::f64::consts::FRAC_1_SQRT_2,
@@ -377,7 +378,7 @@ impl RasterSim {
             } else {
                 // anchors about R/12 apart: the engagement of a smooth cut changes little
                 // over that, and the pixels show where it does not
-                ((r / 12.0) / opts.sample_step.unwrap_or(res / 2.0)).round().clamp(1.0, 16.0) as usize
+                ((r / 12.0) / sample_step).round().clamp(1.0, 16.0) as usize
             },
             keep: regions.keep.clone(),
             keep_edges,
@@ -427,15 +428,7 @@ impl RasterSim {
         self.nbx = self.grid.nx.div_ceil(BLOCK);
         let nby = self.grid.ny.div_ceil(BLOCK);
         (self.bmax, self.bcnt) = (0..self.nbx * nby).into_par_iter().map(|b| self.block_max(b)).unzip();
-        self.pmax = (0..self.nbx * nby)
-            .map(|b| {
-                let (i0, i1, j0, j1) = self.block_cells(b);
-                (j0..=j1)
-                    .flat_map(|j| (i0..=i1).map(move |i| j * self.grid.nx + i))
-                    .map(|k| self.p[k])
-                    .fold(f32::NEG_INFINITY, f32::max)
-            })
-            .collect();
+        self.pmax = (0..self.nbx * nby).map(|b| self.block_max_of(&self.p, b).0).collect();
         self
     }
 
@@ -453,11 +446,16 @@ impl RasterSim {
 
     /// The maximum of block `b` and how many cells hold it.
     fn block_max(&self, b: usize) -> (f32, u32) {
+        self.block_max_of(self.link_heights(), b)
+    }
+
+    /// The maximum of the heights `h` over block `b` and how many cells hold it.
+    fn block_max_of(&self, h: &[f32], b: usize) -> (f32, u32) {
         let (i0, i1, j0, j1) = self.block_cells(b);
         let mut m = f32::NEG_INFINITY;
         let mut n = 0;
         for j in j0..=j1 {
-            for &h in &self.link_heights()[j * self.grid.nx + i0..=j * self.grid.nx + i1] {
+            for &h in &h[j * self.grid.nx + i0..=j * self.grid.nx + i1] {
                 if h > m {
                     m = h;
                     n = 1;
