@@ -105,9 +105,9 @@ impl<'a> Linker<'a> {
 
 impl<'a, M: Material> Linker<'a, M> {
     /// The feed boost of the links' options within the machine's highest feed (see
-    /// [`crate::model::Cutting::max_feed`]).
+    /// [`crate::model::Cutting::boost_within`]; the linker's feed is the job's).
     pub(crate) fn boost(&self) -> f64 {
-        self.link.feed_boost.min(self.job.cutting.max_feed() / self.feed).max(1.0)
+        self.job.cutting.boost_within(self.link.feed_boost)
     }
 
     /// A linker on the material model `sim`, the tool at the safe height above `first`.
