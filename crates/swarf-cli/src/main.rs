@@ -94,9 +94,13 @@ struct PlacementOpts {
     /// STL part on its own: translation after scaling and rotating, mm.
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     part_translate: Option<String>,
-    /// STL part on its own: the stock box is its bounds grown by this sideways and on top, mm.
+    /// STL part on its own: the stock box is its bounds grown by this sideways, mm.
     #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     stock_margin: Option<f64>,
+    /// STL part on its own: stock above the part's top, mm (default 0: no facing of a top
+    /// nobody asked to face).
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    stock_above: Option<f64>,
 }
 
 #[derive(Args, Clone)]
@@ -167,6 +171,10 @@ struct CommonOpts {
     /// instead of rapids at depth: for controls whose G0 is not a straight line.
     #[arg(long)]
     feed_links: bool,
+    /// Z-level jobs: cut each level over the whole part before the next, instead of region by
+    /// region through the levels.
+    #[arg(long)]
+    level_by_level: bool,
     /// Medial: follow every circle all the way round (paper 2 Fig. 1c) instead of returning to
     /// the next circle on a cut-back turn (Fig. 2c, the default).
     #[arg(long)]
@@ -351,6 +359,7 @@ fn flag(s: Setting) -> Option<&'static str> {
         Setting::Stepdown => "--stepdown",
         Setting::Depth => "--depth",
         Setting::StockMargin => "--stock-margin",
+        Setting::StockAbove => "--stock-above",
         Setting::PartScale => "--part-scale",
         Setting::PartRotate => "--part-rotate",
         Setting::PartTranslate => "--part-translate",
@@ -415,6 +424,7 @@ fn library_defaults() -> Vec<(&'static str, &'static str, String)> {
             (cmd, "svg_dpi", num(o.import.svg_px_per_inch)),
             (cmd, "chain_tolerance", num(o.import.chain_tolerance)),
             (cmd, "stock_margin", num(o.stock_margin)),
+            (cmd, "stock_above", num(o.stock_above)),
         ]);
     }
     v.extend([
@@ -423,6 +433,7 @@ fn library_defaults() -> Vec<(&'static str, &'static str, String)> {
         ("plan", "ramp_angle", num(seq.ramp_deg)),
         ("plan", "clearance", num(seq.clearance)),
         ("plan", "stock_margin", num(o.stock_margin)),
+        ("plan", "stock_above", num(o.stock_above)),
     ]);
     v
 }
@@ -560,6 +571,9 @@ fn placement(o: &PlacementOpts) -> Result<Overrides, Failure> {
     if let Some(m) = o.stock_margin {
         ov.stock_margin = m;
     }
+    if let Some(m) = o.stock_above {
+        ov.stock_above = m;
+    }
     Ok(ov)
 }
 
@@ -634,6 +648,7 @@ fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> 
         clearance: o.clearance.unwrap_or(d.clearance),
         feed_boost: o.feed_boost.unwrap_or(d.feed_boost),
         feed_links: o.feed_links,
+        by_level: o.level_by_level,
         ..d
     };
     let sim = SimOptions {

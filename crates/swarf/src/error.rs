@@ -122,6 +122,8 @@ pub enum Setting {
     Depth,
     /// `overrides.stock_margin`: the stock round an STL part, mm.
     StockMargin,
+    /// `overrides.stock_above`: the stock above an STL part's top, mm.
+    StockAbove,
     /// `placement.scale`: an STL part's scale.
     PartScale,
     /// `placement.rotate_deg`: an STL part's rotations, degrees.
@@ -199,6 +201,7 @@ impl Setting {
             Setting::StockBox => "stock_box",
             Setting::Depth => "overrides.depth",
             Setting::StockMargin => "overrides.stock_margin",
+            Setting::StockAbove => "overrides.stock_above",
             Setting::PartScale => "placement.scale",
             Setting::PartRotate => "placement.rotate_deg",
             Setting::PartTranslate => "placement.translate",

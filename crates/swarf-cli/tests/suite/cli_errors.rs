@@ -464,7 +464,10 @@ fn plan_errors() {
     );
     let part = dir.write(
         "part.stl",
-        "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 10 0 0\nvertex 0 10 0\nendloop\nendfacet\nendsolid t\n",
+        concat!(
+            "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 10 0 0\nvertex 0 10 0\nendloop\nendfacet\n",
+            "facet normal 0 -1 0\nouter loop\nvertex 0 0 0\nvertex 10 0 0\nvertex 0 0 5\nendloop\nendfacet\nendsolid t\n"
+        ),
     );
     let before = dir.listing();
     let flat = case("square_pocket.json");

@@ -35,8 +35,11 @@ pub struct Overrides {
     pub import: swarf_import::ImportOptions,
     /// Placement of an STL part read on its own (its units' scale comes from `import.units`).
     pub placement: Placement,
-    /// Stock round an STL part read on its own: its bounds grown by this sideways and on top, mm.
+    /// Stock round an STL part read on its own: its bounds grown by this sideways, mm.
     pub stock_margin: f64,
+    /// Stock above an STL part read on its own, mm: 0 (the default) puts the stock's top at
+    /// the part's, so that no level faces a top nobody asked to face.
+    pub stock_above: f64,
 }
 
 impl Overrides {
@@ -44,7 +47,7 @@ impl Overrides {
     pub const DEFAULT_DEPTH: f64 = 3.0;
 
     /// Nothing overridden: the drawing import defaults, no placement, 2 mm of stock round an STL
-    /// part.
+    /// part and none above it.
     pub const DEFAULT: Overrides = Overrides {
         tool_diameter: None,
         width: None,
@@ -57,6 +60,7 @@ impl Overrides {
         import: swarf_import::ImportOptions::DEFAULT,
         placement: Placement::IDENTITY,
         stock_margin: 2.0,
+        stock_above: 0.0,
     };
 
     /// Checks every value given: the same ranges as the job's own ([`Cutting::validate`],
@@ -87,6 +91,7 @@ impl Overrides {
             (Setting::Allowance, self.allowance),
             (Setting::ChainTolerance, Some(self.import.chain_tolerance)),
             (Setting::StockMargin, Some(self.stock_margin)),
+            (Setting::StockAbove, Some(self.stock_above)),
         ];
         for (setting, v) in zero_or_more {
             if let Some(v) = v
@@ -193,7 +198,7 @@ pub fn load_job(path: &Path, ov: &Overrides) -> Result<Job> {
 /// ([`Error::Setting`]).
 ///
 /// An STL part alone gets a stock box round it (its bounds grown by `stock_margin` sideways and
-/// on top, its bottom at the part's lowest point), is placed by `placement` (after the units'
+/// by `stock_above` on top, none by default; its bottom at the part's lowest point), is placed by `placement` (after the units'
 /// scale), and is roughed to its lowest point with the default cutting data ([`Cutting::DEFAULT`])
 /// and step-downs of [`MeshJob::DEFAULT_STEPDOWN_FRACTION`] of the tool diameter unless the
 /// overrides say otherwise. A drawing is cut [`Overrides::DEFAULT_DEPTH`] deep with the default
@@ -222,9 +227,17 @@ pub fn load_input(path: &Path, ov: &Overrides) -> Result<Input> {
         mesh.transform(&place);
         let (lo, hi) = mesh.bounds().ok_or_else(|| Error::input(path, "file", "the mesh is empty"))?;
         let m = ov.stock_margin;
+        if hi.z + ov.stock_above <= lo.z {
+            return Err(Error::input(
+                path,
+                "file",
+                "the part is flat: there is nothing above its lowest point to rough (--stock-above MM puts stock on it)",
+            ));
+        }
         let cutting = Cutting::with_tool_diameter(ov.tool_diameter.unwrap_or(Tool::DEFAULT.diameter));
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("part");
-        let (stock_lo, stock_hi) = (DVec3::new(lo.x - m, lo.y - m, lo.z), DVec3::new(hi.x + m, hi.y + m, hi.z + m));
+        let (stock_lo, stock_hi) =
+            (DVec3::new(lo.x - m, lo.y - m, lo.z), DVec3::new(hi.x + m, hi.y + m, hi.z + ov.stock_above));
         Input::Mesh(Box::new(MeshJob::new(name, mesh, stock_lo, stock_hi, cutting)))
     } else if is_case {
         case::read_input(path)?

@@ -9,3 +9,4 @@
 pub mod rough;
 pub mod toolseq;
 pub mod zlevel;
+pub(crate) mod zorder;

@@ -6,11 +6,12 @@
 //! ([`crate::geom::mesh::Shadows`], grown by the allowance), planned by any 2.5D strategy (the
 //! offset strategy is Algorithm 1, the level's `reachable` region Algorithm 2's accessible
 //! area) on the stock the levels above left; the report's replay reads the part's surface from
-//! the mesh, so a gouge anywhere on it is found. The walk-through is in `docs/zlevel.md`.
+//! the mesh, so a gouge anywhere on it is found. The levels' programs are then cut into pieces
+//! and put in order region by region through the levels (`job/zorder.rs`), so that the tool
+//! finishes a region to its bottom before it travels. The walk-through is in `docs/zlevel.md`.
 
 use super::rough::{About, RoughOptions, RoughResult, Stage, finish};
 use crate::error::{Error, Result, Setting};
-use crate::geom::DVec3;
 use crate::model::{MeshJob, keep_of};
 use crate::post;
 use crate::sim::raster::RasterSim;
@@ -35,8 +36,11 @@ pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -
     let zs = job.levels();
     let mut shadows = crate::geom::mesh::Shadows::new(&job.mesh);
     let mut state = crate::sim::heights::mesh_model(job, &opts.sim)?;
+    // (heights only: no engagement is measured on it)
+    state.track_exact = false;
     let safe_z = job.top() + opts.link.clearance;
-    let mut out: Option<Toolpath> = None;
+    let mut levels: Vec<(f64, Toolpath)> = Vec::new();
+    let mut keeps = super::zorder::Keeps::new(job.top());
     let mut done = Vec::new();
     for (i, &z) in zs.iter().enumerate() {
         progress(i as f64 / zs.len() as f64);
@@ -52,6 +56,7 @@ pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -
             keep.rings().count(),
             ts.elapsed().as_secs_f64() - t_shadow
         );
+        keeps.push(z, &keep, job.radius());
         let lj = job.level_job(&keep, z);
         // the level is planned on what the levels above left
         let heights = HeightMap { grid: state.grid, stock: state.heights().to_vec(), part: None };
@@ -90,48 +95,26 @@ pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -
         }
         cut_all(&mut state, &tp);
         done.push(z);
-        match &mut out {
-            None => {
-                let mut first = Toolpath::new(job.cutting.tool.clone(), tp.start, safe_z);
-                first.note(format!("z-level {}: z {z:.3}", done.len()));
-                append(&mut first, tp, safe_z);
-                out = Some(first);
-            }
-            Some(all) => {
-                all.note(format!("z-level {}: z {z:.3}", done.len()));
-                append(all, tp, safe_z);
-            }
-        }
+        levels.push((z, tp));
     }
     progress(1.0);
-    let mut tp = out.ok_or_else(|| {
-        Error::job("stock_box", "nothing to cut: the part fills the stock, or the tool reaches no material")
-    })?;
-    let end = tp.end();
-    if end.z < safe_z - 1e-9 {
-        tp.note("end: retract");
-        tp.rapid(DVec3::new(end.x, end.y, safe_z));
-    }
+    // the pieces of the levels in order, region by region, on the material model of the whole
+    // job (the links checked against the surely cut heights, as the levels' own)
+    let mut model = crate::sim::heights::mesh_model(job, &SimOptions { sure_links: true, ..opts.sim.clone() })?;
+    model.track_exact = false;
+    let how = super::zorder::Linking {
+        r: job.radius(),
+        safe_z,
+        approach: opts.link.approach,
+        by_level: opts.link.by_level,
+        link_feed: job.cutting.feed * job.cutting.boost_within(opts.link.feed_boost),
+        keeps,
+    };
+    let tp = super::zorder::link(&levels, &mut model, &how, |li, z| format!("z-level {}: z {z:.3}", li + 1))
+        .ok_or_else(|| {
+            Error::job("stock_box", "nothing to cut: the part fills the stock, or the tool reaches no material")
+        })?;
     Ok((tp, done))
-}
-
-/// Appends a level's program: a rapid at the safe height to above its start, then its moves.
-fn append(all: &mut Toolpath, tp: Toolpath, safe_z: f64) {
-    let end = all.end();
-    if (end.truncate() - tp.start.truncate()).length() > 1e-9 || (end.z - tp.start.z).abs() > 1e-9 {
-        if end.z < safe_z - 1e-9 {
-            all.rapid(DVec3::new(end.x, end.y, safe_z));
-        }
-        all.rapid(DVec3::new(tp.start.x, tp.start.y, safe_z));
-        if tp.start.z < safe_z - 1e-9 {
-            all.rapid(tp.start);
-        }
-    }
-    let base = all.moves.len();
-    for n in tp.notes {
-        all.notes.push(crate::toolpath::Note { at: base + n.at, text: n.text });
-    }
-    all.moves.extend(tp.moves);
 }
 
 /// Roughs a mesh job: plans, posts and (optionally) simulates it for the report. Each level is

@@ -43,13 +43,17 @@ pub struct LinkOptions {
     /// feed boost; lifted rapids when long) instead of rapids at depth (G0): for controls whose
     /// G0 does not move in a straight line.
     pub feed_links: bool,
+    /// Z-level jobs: cut each level over the whole part before the next (the order the levels
+    /// are planned in) instead of region by region through the levels (see
+    /// `docs/zlevel.md`).
+    pub by_level: bool,
 }
 
 impl LinkOptions {
     /// swarf's defaults: climb milling, no stock left and no finishing contour, 3° ramps and
     /// helices of 0.1–0.75 R, 2 µm arc fitting, 5 mm clearance, entries from 1 mm above the
     /// material, plunges at half the feed, ramps at the feed, the feed raised up to 3× where the
-    /// tool cuts little, rapid links.
+    /// tool cuts little, rapid links, z-levels region by region.
     pub const DEFAULT: LinkOptions = LinkOptions {
         climb: true,
         stock_to_leave: 0.0,
@@ -64,6 +68,7 @@ impl LinkOptions {
         ramp_feed_frac: 1.0,
         feed_boost: 3.0,
         feed_links: false,
+        by_level: false,
     };
 
     /// Checks every value against its range.

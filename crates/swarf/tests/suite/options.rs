@@ -146,6 +146,7 @@ fn bad_overrides_name_their_setting() {
         ("allowance −1", &case, Overrides { allowance: Some(-1.0), ..o.clone() }, Setting::Allowance),
         ("depth −3", &drawing, Overrides { depth: Some(-3.0), ..o.clone() }, Setting::Depth),
         ("stock margin −1", &stl, Overrides { stock_margin: -1.0, ..o.clone() }, Setting::StockMargin),
+        ("stock above −1", &stl, Overrides { stock_above: -1.0, ..o.clone() }, Setting::StockAbove),
         (
             "chaining tolerance −1",
             &drawing,
@@ -254,6 +255,7 @@ fn setting_names_are_unique() {
         Setting::StockBox,
         Setting::Depth,
         Setting::StockMargin,
+        Setting::StockAbove,
         Setting::PartScale,
         Setting::PartRotate,
         Setting::PartTranslate,

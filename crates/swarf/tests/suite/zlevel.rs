@@ -120,3 +120,28 @@ fn a_bad_stl_is_named() {
     let _ = std::fs::remove_dir_all(&dir);
     assert!(e.contains("block.stl: line 5"), "{e}");
 }
+
+/// An STL part read on its own gets no stock above its top unless asked (no facing), and a
+/// flat part, with nothing to rough, is refused with the file named.
+#[test]
+fn an_stl_alone_is_not_faced_unless_asked() {
+    use swarf::{Input, Overrides};
+    let dir = tmpdir("alone");
+    let _ = write_case(&dir);
+    let stl = dir.join("block.stl");
+    let load = |above: f64| match swarf::io::load_input(&stl, &Overrides { stock_above: above, ..Overrides::DEFAULT }) {
+        Ok(Input::Mesh(job)) => job,
+        _ => panic!("a mesh job"),
+    };
+    let (plain, faced) = (load(0.0), load(1.5));
+    assert_eq!(plain.stock_hi.z, plain.mesh.bounds().expect("facets").1.z);
+    assert!((faced.stock_hi.z - plain.stock_hi.z - 1.5).abs() < 1e-12);
+    std::fs::write(
+        dir.join("flat.stl"),
+        "solid f\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 10 0 0\nvertex 0 10 0\nendloop\nendfacet\nendsolid f\n",
+    )
+    .unwrap();
+    let e = swarf::io::load_input(&dir.join("flat.stl"), &Overrides::DEFAULT).map(|_| ()).unwrap_err();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(matches!(e, swarf::Error::Input { .. }) && e.to_string().contains("flat.stl"), "{e}");
+}
