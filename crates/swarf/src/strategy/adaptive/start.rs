@@ -10,6 +10,9 @@ use crate::sim::edt;
 use crate::sim::sweep::Path;
 use std::f64::consts::{FRAC_PI_2, TAU};
 
+/// Half the width, in blocks, of the first window the lateral starts are looked for in.
+const LATERAL_WINDOW: usize = 24;
+
 impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
     // ---- starting points -------------------------------------------------------------------
 
@@ -165,8 +168,8 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         // the distance to the material is needed only up to `r + 2.5 cell`: the transform runs
         // over the blocks with material and that much around them (late in a level, a few
         // scraps of a large grid)
+        let k = ((self.c.r + 2.5 * cell) / cell).ceil() as usize + 1;
         let (i0, i1, j0, j1) = {
-            let k = ((self.c.r + 2.5 * cell) / cell).ceil() as usize + 1;
             let (mut i0, mut i1, mut j0, mut j1) = (cx, 0, cy, 0);
             for (n, _) in mat.iter().enumerate().filter(|(_, m)| **m) {
                 let (i, j) = (n % cx, n / cx);
@@ -174,89 +177,135 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
             }
             (i0.saturating_sub(k), (i1 + k).min(cx - 1), j0.saturating_sub(k), (j1 + k).min(cy - 1))
         };
-        let (sx, sy) = (i1 - i0 + 1, j1 - j0 + 1);
-        let sub: Vec<bool> = (j0..=j1).flat_map(|j| mat[j * cx + i0..=j * cx + i1].iter().copied()).collect();
-        let dm = edt::distance(&sub, sx, sy);
+        // The candidates nearest the tool first: the transform and the candidates of a window of
+        // blocks round it (the transform over the window grown by `k` blocks, so that its
+        // distances up to `r + 2.5 cell` are those of the whole grid), only those nearer than
+        // any block outside the window and away from the walls; when none of them gives a
+        // start, a window four times as wide, and at last the whole range. The order of the
+        // candidates tried, and so the start found, is the whole range's: each window's list
+        // begins with the one before it (the same candidates in the same order), whose tries
+        // are not made again. (One transform of the whole range per start dominated the
+        // planning of large levels with a small tool.)
         let cur = self.l.tp.end().truncate();
-        let mut cands: Vec<(f64, DVec2)> = Vec::new();
-        for j in j0..=j1 {
-            for i in i0..=i1 {
-                let d = dm[(j - j0) * sx + (i - i0)] as f64 * cell;
-                // block centres a little more than a radius from the material
-                if d < self.c.r + 0.5 * cell || d > self.c.r + 2.5 * cell {
-                    continue;
-                }
-                let mut p = DVec2::new(g.x0 + (i as f64 + 0.5) * cell, g.y0 + (j as f64 + 0.5) * cell);
-                let mut dk = self.dk_at(p);
-                if dk < self.c.r + self.c.margin + cell {
-                    if !self.relaxed {
-                        continue;
-                    }
-                    // in a channel narrower than two blocks the centres may all miss the strip
-                    // the tool can stand on: the point of the block farthest from the walls
-                    let third = cell / 3.0;
-                    let best = (-1..=1)
-                        .flat_map(|a| (-1..=1).map(move |b| p + DVec2::new(a as f64, b as f64) * third))
-                        .map(|q| (self.dk_at(q), q))
-                        .max_by(|a, b| a.0.total_cmp(&b.0))
-                        .expect("nine points");
-                    if best.0 < self.c.r + self.c.margin + 2.0 * g.res {
-                        continue;
-                    }
-                    (dk, p) = best;
-                }
-                if self.failed.iter().any(|f| (*f - p).length() < 1.5 * cell) {
-                    continue;
-                }
-                // not tangent to the part (§4.5): starts that are within a tool diameter of the
-                // walls come after all the others, which clear toward the walls first
-                let near_wall = dk < 3.0 * self.c.r + self.c.margin;
-                cands.push(((p - cur).length() + if near_wall { 1e6 } else { 0.0 }, p));
-            }
-        }
-        cands.sort_by(|a, b| a.0.total_cmp(&b.0));
-        for (_, p) in cands.into_iter().take(tries) {
-            if !self.clear(p) || !self.allowed(p) {
-                continue;
-            }
-            // direction to the material: the engaged samples of the enlarged rings
-            let Some(dir) = self.toward_material(p) else { continue };
-            // back up along the front, against the heading the pass will take, when a wall is
-            // within reach that way: the pass then sweeps the whole front from that wall
-            // instead of a step's worth of it (in a slot, the loops of trochoidal milling)
-            let cand = p;
-            let p = self.upstream(p, dir, cell);
-            // slide toward the material until just before the tool touches it
-            let u = DVec2::new(dir.cos(), dir.sin());
-            // (by bisection to a cell: the clearance test reads a whole disk of cells)
-            let ok = |me: &Self, t: f64| {
-                let n = p + u * t;
-                me.clear(n) && me.allowed(n)
-            };
-            let (mut lo, mut hi) = (0.0, 4.0 * cell);
-            if ok(self, hi) {
-                lo = hi;
+        let block = |v: f64, lo: f64, a: usize, b: usize| (((v - lo) / cell).floor().max(0.0) as usize).clamp(a, b);
+        let (ci, cj) = (block(cur.x, g.x0, i0, i1), block(cur.y, g.y0, j0, j1));
+        // (failures of this call's tries do not change its candidates)
+        let failed0 = self.failed.len();
+        let mut tried = 0usize;
+        let mut w = LATERAL_WINDOW;
+        loop {
+            let (wi0, wi1) = (ci.saturating_sub(w).max(i0), (ci + w).min(i1));
+            let (wj0, wj1) = (cj.saturating_sub(w).max(j0), (cj + w).min(j1));
+            let full = (wi0, wi1, wj0, wj1) == (i0, i1, j0, j1);
+            // how near the tool every candidate outside the window is not
+            let near = if full {
+                f64::INFINITY
             } else {
-                while hi - lo > g.res {
-                    let mid = 0.5 * (lo + hi);
-                    if ok(self, mid) {
-                        lo = mid;
-                    } else {
-                        hi = mid;
+                let (xl, xh) = (g.x0 + wi0 as f64 * cell, g.x0 + (wi1 + 1) as f64 * cell);
+                let (yl, yh) = (g.y0 + wj0 as f64 * cell, g.y0 + (wj1 + 1) as f64 * cell);
+                [(wi0 > i0, cur.x - xl), (wi1 < i1, xh - cur.x), (wj0 > j0, cur.y - yl), (wj1 < j1, yh - cur.y)]
+                    .into_iter()
+                    .filter(|s| s.0)
+                    .map(|s| s.1)
+                    .fold(f64::INFINITY, f64::min)
+            };
+            let (ei0, ei1) = (wi0.saturating_sub(k).max(i0), (wi1 + k).min(i1));
+            let (ej0, ej1) = (wj0.saturating_sub(k).max(j0), (wj1 + k).min(j1));
+            let (sx, sy) = (ei1 - ei0 + 1, ej1 - ej0 + 1);
+            let sub: Vec<bool> =
+                (ej0..=ej1).flat_map(|j| self.coarse[j * cx + ei0..=j * cx + ei1].iter().copied()).collect();
+            let dm = edt::distance(&sub, sx, sy);
+            let mut cands: Vec<(f64, DVec2)> = Vec::new();
+            for j in wj0..=wj1 {
+                for i in wi0..=wi1 {
+                    let d = dm[(j - ej0) * sx + (i - ei0)] as f64 * cell;
+                    // block centres a little more than a radius from the material
+                    if d < self.c.r + 0.5 * cell || d > self.c.r + 2.5 * cell {
+                        continue;
+                    }
+                    let mut p = DVec2::new(g.x0 + (i as f64 + 0.5) * cell, g.y0 + (j as f64 + 0.5) * cell);
+                    let mut dk = self.dk_at(p);
+                    if dk < self.c.r + self.c.margin + cell {
+                        if !self.relaxed {
+                            continue;
+                        }
+                        // in a channel narrower than two blocks the centres may all miss the strip
+                        // the tool can stand on: the point of the block farthest from the walls
+                        let third = cell / 3.0;
+                        let best = (-1..=1)
+                            .flat_map(|a| (-1..=1).map(move |b| p + DVec2::new(a as f64, b as f64) * third))
+                            .map(|q| (self.dk_at(q), q))
+                            .max_by(|a, b| a.0.total_cmp(&b.0))
+                            .expect("nine points");
+                        if best.0 < self.c.r + self.c.margin + 2.0 * g.res {
+                            continue;
+                        }
+                        (dk, p) = best;
+                    }
+                    if self.failed[..failed0].iter().any(|f| (*f - p).length() < 1.5 * cell) {
+                        continue;
+                    }
+                    // not tangent to the part (§4.5): starts that are within a tool diameter of the
+                    // walls come after all the others, which clear toward the walls first
+                    let near_wall = dk < 3.0 * self.c.r + self.c.margin;
+                    let key = (p - cur).length() + if near_wall { 1e6 } else { 0.0 };
+                    if full || key <= near {
+                        cands.push((key, p));
                     }
                 }
             }
-            // the pass must find the material from there (its ring, or the enlarged one of
-            // footnote 3), or it would end at once after a descent for nothing
-            let at = p + u * lo;
-            let heading = dir + if self.c.climb { 1.0 } else { -1.0 } * FRAC_PI_2;
-            if self.direction(at, heading).is_none() {
-                self.failed.push(cand);
-                continue;
+            cands.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let skip = tried.min(cands.len());
+            for (_, p) in cands.into_iter().skip(skip) {
+                if tried >= tries {
+                    return None;
+                }
+                tried += 1;
+                if !self.clear(p) || !self.allowed(p) {
+                    continue;
+                }
+                // direction to the material: the engaged samples of the enlarged rings
+                let Some(dir) = self.toward_material(p) else { continue };
+                // back up along the front, against the heading the pass will take, when a wall is
+                // within reach that way: the pass then sweeps the whole front from that wall
+                // instead of a step's worth of it (in a slot, the loops of trochoidal milling)
+                let cand = p;
+                let p = self.upstream(p, dir, cell);
+                // slide toward the material until just before the tool touches it
+                let u = DVec2::new(dir.cos(), dir.sin());
+                // (by bisection to a cell: the clearance test reads a whole disk of cells)
+                let ok = |me: &Self, t: f64| {
+                    let n = p + u * t;
+                    me.clear(n) && me.allowed(n)
+                };
+                let (mut lo, mut hi) = (0.0, 4.0 * cell);
+                if ok(self, hi) {
+                    lo = hi;
+                } else {
+                    while hi - lo > g.res {
+                        let mid = 0.5 * (lo + hi);
+                        if ok(self, mid) {
+                            lo = mid;
+                        } else {
+                            hi = mid;
+                        }
+                    }
+                }
+                // the pass must find the material from there (its ring, or the enlarged one of
+                // footnote 3), or it would end at once after a descent for nothing
+                let at = p + u * lo;
+                let heading = dir + if self.c.climb { 1.0 } else { -1.0 } * FRAC_PI_2;
+                if self.direction(at, heading).is_none() {
+                    self.failed.push(cand);
+                    continue;
+                }
+                return Some((at, cand, dir));
             }
-            return Some((at, cand, dir));
+            if full {
+                return None;
+            }
+            w *= 4;
         }
-        None
     }
 
     /// A lateral start `p` (material toward `dir`) moved back along the front, against the
