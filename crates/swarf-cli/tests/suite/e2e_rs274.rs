@@ -72,7 +72,9 @@ struct Canon {
 }
 
 /// Runs `rs274 -g -t tool.tbl IN.ngc OUT.txt` in a fresh folder with a zero-length tool table and
-/// no var file; returns the canonical text, or the interpreter's complaint.
+/// no var file, the folder its home too; returns the canonical text, or the interpreter's
+/// complaint. (rs274 truncates and maps `$HOME/.tool.mmap` as shared memory: two of them run at
+/// once with one home kill each other with SIGBUS, about one run in five with eight at once.)
 fn interpret(rs274: &Path, ngc: &Path) -> Result<String, String> {
     let work = TempDir::new("rs274");
     let table: String = (1..=99).map(|i| format!("T{i} P{i} Z0 D0 ;zero-length tool\n")).collect();
@@ -80,6 +82,7 @@ fn interpret(rs274: &Path, ngc: &Path) -> Result<String, String> {
     let ngc = std::fs::canonicalize(ngc).map_err(|e| format!("{}: {e}", ngc.display()))?;
     let out = Command::new(rs274)
         .current_dir(work.path())
+        .env("HOME", work.path())
         .args(["-g", "-t", "tool.tbl"])
         .arg(&ngc)
         .arg("canon.txt")

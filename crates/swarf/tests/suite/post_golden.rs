@@ -259,8 +259,11 @@ fn rs274_accepts_both_programs() {
     for (post, name) in POSTS {
         let ngc = work.join(format!("{name}.ngc"));
         std::fs::write(&ngc, post::write(&fixture(), post, &header())).expect("write");
+        // (its own home: rs274 truncates and maps `$HOME/.tool.mmap`, which another rs274 run
+        // at the same time would truncate under it)
         let out = std::process::Command::new(&rs274)
             .current_dir(&work)
+            .env("HOME", &work)
             .args(["-g", "-t", "tool.tbl"])
             .arg(&ngc)
             .arg(work.join(format!("{name}.canon")))
