@@ -14,17 +14,21 @@
 //! shortest, measured for the nearest few on the material the pieces so far left:
 //!
 //! ```text
-//!   level 20  ███████████  ██████          order planned:  A20 B20 A21 B21 A22 B22 …
-//!   level 21     A ██        B ██          order linked:   A20 B20 B21 B22 … A21 A22 …
-//!   level 22     A ██        B ██          (the bores each cut to the bottom in turn)
+//!   level 20     A ██        B ██          order planned:  A20 B20 A21 B21 A22 B22 …
+//!   level 21     A ██        B ██          order linked:   A20 A21 A22 … B20 B21 B22 …
+//!   level 22     A ██        B ██          (each bore cut to its bottom in turn)
 //! ```
 //!
 //! A link is the piece's own planned travel where it follows its planned predecessor and every
 //! piece planned before it has been cut (the material is then what it was planned on, or less);
-//! else straight across at the height of the higher end when that way is clear, else just over
-//! the material on the way (its top within the radius and half a millimetre, plus the approach
-//! height), else at the safe height. [`crate::plan::LinkOptions::by_level`] keeps the planned
-//! order (each level over the whole part before the next), with the links still planned so.
+//! else straight across at the height of the higher end when that way is clear (or only leaves
+//! the material the tool touches at its start, that stretch fed); else round the material at
+//! that height (the keep-down search of [`crate::plan::route`]) when shorter than lifting; else
+//! just over the material on the way (its top within the radius and half a millimetre, plus the
+//! approach height); else at the safe height. Every way is tested on the model's cells and on
+//! the part's exact outline at its height ([`Keeps`]: a rib thinner than a cell is invisible to
+//! the cells). [`crate::plan::LinkOptions::by_level`] keeps the planned order (each level over
+//! the whole part before the next), with the links still planned so.
 
 use crate::geom::index::EdgeIndex;
 use crate::geom::{Area, DVec2, DVec3};
@@ -158,7 +162,6 @@ fn footprint(piece: &Piece, r: f64, origin: DVec2, size: f64, nx: i64) -> Vec<u3
     cells
 }
 
-/// The links' planner on the material the pieces so far left.
 /// The part as each level saw it: the shadow of the mesh above the level grown by the
 /// allowance (exact outlines, where the model's cells can miss a thin rib).
 pub(crate) struct Keeps {
@@ -193,6 +196,7 @@ impl Keeps {
     }
 }
 
+/// The links' planner on the material the pieces so far left.
 pub(crate) struct Links<'a> {
     pub(crate) sim: &'a RasterSim,
     pub(crate) keeps: &'a Keeps,
