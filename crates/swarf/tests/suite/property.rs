@@ -1,7 +1,9 @@
 //! Property tests: random pockets with islands and random open-sided jobs, roughed with the
 //! `offset` and `zigzag` strategies and checked with swarf's own simulator (the report):
 //! no gouge, no rapid collision, less than 0.5 % of the reachable area left, and no plunge
-//! where the tool has room for a helix.
+//! where the tool has room for a helix; and random parts on a plate (a frame and bosses, as
+//! an STL) roughed in z-levels region by region and level by level, which must cut the same
+//! moves on the same material.
 //!
 //! The generator is deterministic: every case is made from one seed (a xorshift64* stream seeded
 //! through splitmix64), so a failure reproduces from its seed alone. A failing case is reported
@@ -809,4 +811,148 @@ fn the_checks_can_fail() {
     let rp = sim.replay(&tp, &mut |_| {});
     assert_eq!(rp.plunges.len(), 1, "a plunge into fresh material");
     assert!(!rp.rapid_collisions.is_empty(), "a rapid through uncut material");
+}
+
+// ---------------------------------------------------------------------------------------------
+// random meshes: z-level programs region by region against level by level
+
+/// The facets of an axis-aligned box (outward, counter-clockwise seen from outside).
+fn box_facets(lo: [f64; 3], hi: [f64; 3]) -> Vec<[[f64; 3]; 3]> {
+    let c = |i: usize| {
+        [
+            if i & 1 == 0 { lo[0] } else { hi[0] },
+            if i & 2 == 0 { lo[1] } else { hi[1] },
+            if i & 4 == 0 { lo[2] } else { hi[2] },
+        ]
+    };
+    let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+    quads.iter().flat_map(|q| [[c(q[0]), c(q[1]), c(q[2])], [c(q[0]), c(q[2]), c(q[3])]]).collect()
+}
+
+/// A random part on a plate, written as an ASCII STL with its case: a few bosses and a frame
+/// whose inside is a pocket of its own (a region the levels reach only through it).
+fn mesh_case(seed: u64, dir: &std::path::Path) -> (std::path::PathBuf, String) {
+    let mut rng = Rng::new(seed ^ 0x005E_ED3D);
+    let (w, h) = (rng.range(60.0, 90.0), rng.range(40.0, 60.0));
+    let top = rng.range(8.0, 12.0);
+    let mut facets = box_facets([0.0, 0.0, 0.0], [w, h, 1.0]);
+    let mut what = format!("plate {w:.1} × {h:.1}, top {top:.1}");
+    // the frame, in the left half
+    let (fx, fy) = (rng.range(4.0, 8.0), rng.range(4.0, 10.0));
+    let (fw, fh, t) = (rng.range(22.0, 30.0), rng.range(20.0, 28.0), rng.range(4.0, 6.0));
+    let fz = rng.range(0.6, 1.0) * top;
+    for (lo, hi) in [
+        ([fx, fy], [fx + fw, fy + t]),
+        ([fx, fy + fh - t], [fx + fw, fy + fh]),
+        ([fx, fy], [fx + t, fy + fh]),
+        ([fx + fw - t, fy], [fx + fw, fy + fh]),
+    ] {
+        facets.extend(box_facets([lo[0], lo[1], 0.0], [hi[0], hi[1], fz]));
+    }
+    let _ = write!(what, ", frame at ({fx:.1}, {fy:.1}) {fw:.1} × {fh:.1} × {fz:.1}");
+    // bosses in the right half
+    for _ in 0..rng.int(1, 3) {
+        let (bw, bh) = (rng.range(4.0, 12.0), rng.range(4.0, 12.0));
+        let (bx, by) = (rng.range(0.55 * w, w - bw - 3.0), rng.range(3.0, h - bh - 3.0));
+        let bz = rng.range(0.3, 1.0) * top;
+        facets.extend(box_facets([bx, by, 0.0], [bx + bw, by + bh, bz]));
+        let _ = write!(what, ", boss at ({bx:.1}, {by:.1}) {bw:.1} × {bh:.1} × {bz:.1}");
+    }
+    let mut stl = String::from("solid random\n");
+    for f in &facets {
+        stl += "facet normal 0 0 0\nouter loop\n";
+        for v in f {
+            let _ = writeln!(stl, "vertex {} {} {}", v[0], v[1], v[2]);
+        }
+        stl += "endloop\nendfacet\n";
+    }
+    stl += "endsolid random\n";
+    std::fs::write(dir.join(format!("part{seed}.stl")), stl).expect("write the STL");
+    let d = [4.0, 5.0, 6.0][rng.int(0, 2)];
+    let stepdown = rng.range(1.5, 3.0);
+    let case = format!(
+        r#"{{"units": "mm", "tool": {{"diameter": {d}, "type": "flat"}}, "stock_box": [0, 0, 0, {w}, {h}, {top}],
+            "part_stl": "part{seed}.stl", "stepdown": {stepdown}, "engagement_deg": 60, "feed_default": 1000, "rapid_rate": 5000}}"#
+    );
+    let path = dir.join(format!("case{seed}.json"));
+    std::fs::write(&path, case).expect("write the case");
+    let _ = write!(what, ", Ø{d} step-down {stepdown:.2}");
+    (path, what)
+}
+
+/// Region by region, a z-level program is the level-by-level program in another order with
+/// other links: on random parts both are clean, and they cut the same moves on the same
+/// material (the same plunges, removed volume and highest engagement), region by region with
+/// no more retracts.
+#[test]
+fn random_meshes_cut_region_by_region_as_level_by_level() {
+    use swarf::toolpath::MoveKind;
+    let dir = std::env::temp_dir().join(format!("swarf-random-meshes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let mut bad = Vec::new();
+    let mut reordered = 0;
+    for seed in 0..3u64 {
+        let (case, what) = mesh_case(seed, &dir);
+        let swarf::io::Input::Mesh(job) = swarf::io::load_input(&case, &Default::default()).expect("the case") else {
+            panic!("a 3D case reads as a mesh job")
+        };
+        let run = |by_level: bool| {
+            let opts = RoughOptions {
+                link: LinkOptions { by_level, ..LinkOptions::DEFAULT },
+                sim: SimOptions { res: Some(0.1), ..Default::default() },
+                ..Default::default()
+            };
+            swarf::job::zlevel::rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("seed {seed}: {e}"))
+        };
+        let (region, level) = (run(false), run(true));
+        let announced =
+            |tp: &swarf::toolpath::Toolpath| tp.notes.iter().filter(|n| n.text.starts_with("z-level")).count();
+        if announced(&region.toolpath) != announced(&level.toolpath) {
+            reordered += 1;
+        }
+        let cuts = |tp: &swarf::toolpath::Toolpath| {
+            let mut v: Vec<String> = tp
+                .moves
+                .iter()
+                .filter(|m| !m.is_rapid() && m.kind != MoveKind::Link)
+                .map(|m| format!("{:?} {:?} {:?} {}", m.kind, m.motion, m.to, m.feed))
+                .collect();
+            v.sort();
+            v
+        };
+        let (a, b) = (&region.report, &level.report);
+        let mut problems = Vec::new();
+        for (name, r) in [("region by region", a), ("level by level", b)] {
+            if r.gouges + r.rapid_collisions > 0 {
+                problems.push(format!("{name}: {} gouges, {} rapid collisions", r.gouges, r.rapid_collisions));
+            }
+        }
+        if cuts(&region.toolpath) != cuts(&level.toolpath) {
+            problems.push("the cutting moves differ".into());
+        }
+        if a.plunges != b.plunges
+            || (a.removed_volume_mm3 - b.removed_volume_mm3).abs() > 1e-6 * b.removed_volume_mm3
+            || (a.engagement_deg.max - b.engagement_deg.max).abs() > 1e-6
+        {
+            problems.push(format!(
+                "figures differ: plunges {} / {}, removed {} / {} mm³, max engagement {} / {}°",
+                a.plunges,
+                b.plunges,
+                a.removed_volume_mm3,
+                b.removed_volume_mm3,
+                a.engagement_deg.max,
+                b.engagement_deg.max
+            ));
+        }
+        if a.retracts > b.retracts {
+            problems.push(format!("{} retracts region by region, {} level by level", a.retracts, b.retracts));
+        }
+        if !problems.is_empty() {
+            bad.push(format!("seed {seed} ({what}): {}", problems.join("; ")));
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+    // (not a test of nothing: the frame's pocket is cut to its bottom on its own)
+    assert!(reordered > 0, "no program was reordered");
 }
