@@ -198,10 +198,10 @@ pub fn load_job(path: &Path, ov: &Overrides) -> Result<Job> {
 /// ([`Error::Setting`]).
 ///
 /// An STL part alone gets a stock box round it (its bounds grown by `stock_margin` sideways and
-/// by `stock_above` on top, none by default; its bottom at the part's lowest point), is placed by `placement` (after the units'
-/// scale), and is roughed to its lowest point with the default cutting data ([`Cutting::DEFAULT`])
-/// and step-downs of [`MeshJob::DEFAULT_STEPDOWN_FRACTION`] of the tool diameter unless the
-/// overrides say otherwise. A drawing is cut [`Overrides::DEFAULT_DEPTH`] deep with the default
+/// by `stock_above` on top, none by default; its bottom at the part's lowest point), is placed
+/// by `placement` (after the units' scale), and is roughed to its lowest point with the default
+/// cutting data ([`Cutting::DEFAULT`]) and step-downs of [`MeshJob::DEFAULT_STEPDOWN_FRACTION`]
+/// of the tool diameter unless the overrides say otherwise. A drawing is cut [`Overrides::DEFAULT_DEPTH`] deep with the default
 /// cutting data (see [`drawing::job_from_drawing`]).
 ///
 /// ```
