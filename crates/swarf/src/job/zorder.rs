@@ -224,43 +224,21 @@ impl Links<'_> {
     /// else just over the material on the way; else at the safe height. Rises and descents
     /// are vertical.
     pub(crate) fn way(&self, e: DVec3, s: DVec3) -> Vec<Step> {
-        let rapid = |to: DVec3| Step { to, fed: false };
         let (a, b) = (e.truncate(), s.truncate());
         if (a - b).length() < 1e-9 {
-            return if (e.z - s.z).abs() > 1e-9 { vec![rapid(s)] } else { Vec::new() };
+            return if (e.z - s.z).abs() > 1e-9 { vec![Step { to: s, fed: false }] } else { Vec::new() };
         }
         let wide = 0.5 + self.margin;
         let across = |h: f64| Path::Line { a: a.extend(h), b: b.extend(h) };
         let h0 = e.z.max(s.z);
-        let mut out = Vec::with_capacity(4);
-        let mut h = None;
         let kept = |h: f64| self.keeps.clear(&across(h), h, self.r);
         if self.sim.is_clear(&across(h0), wide) && kept(h0) {
-            h = Some(h0);
-        } else if let Some(t) = self.sim.leaving_distance(a.extend(h0), b.extend(h0), self.margin)
+            return at_height(e, s, h0, &[b], 0.0);
+        }
+        if let Some(t) = self.sim.leaving_distance(a.extend(h0), b.extend(h0), self.margin)
             && kept(h0)
         {
-            if h0 > e.z + 1e-9 {
-                out.push(rapid(a.extend(h0)));
-            }
-            if t > 0.0 {
-                out.push(Step { to: a.lerp(b, t / (b - a).length()).extend(h0), fed: true });
-            }
-            out.push(rapid(b.extend(h0)));
-            if h0 > s.z + 1e-9 {
-                out.push(rapid(s));
-            }
-            return out;
-        }
-        if let Some(h) = h {
-            if h > e.z + 1e-9 {
-                out.push(rapid(a.extend(h)));
-            }
-            out.push(rapid(b.extend(h)));
-            if h > s.z + 1e-9 {
-                out.push(rapid(s));
-            }
-            return out;
+            return at_height(e, s, h0, &[b], t);
         }
         // over the material on the way, or at the safe height
         let top = self.sim.max_height_near(&across(h0), self.r + wide) as f64;
@@ -270,40 +248,16 @@ impl Links<'_> {
         } else {
             self.safe_z.max(h0)
         };
-        let mut lifted = Vec::with_capacity(3);
-        if h > e.z + 1e-9 {
-            lifted.push(rapid(a.extend(h)));
-        }
-        lifted.push(rapid(b.extend(h)));
-        if h > s.z + 1e-9 {
-            lifted.push(rapid(s));
-        }
+        let lifted = at_height(e, s, h, &[b], 0.0);
         // or round the material at the height of the higher end, when that is shorter
         let rise = (h0 - e.z) + (h0 - s.z);
         let budget = steps_length(e, &lifted) - rise;
         if budget > (b - a).length() + 1e-6
             && let Some(way) = self.around(a, b, h0, budget)
         {
-            if h0 > e.z + 1e-9 {
-                out.push(rapid(a.extend(h0)));
-            }
-            for (k, w) in way.into_iter().enumerate() {
-                let from = out.last().map_or(e, |q: &Step| q.to);
-                let t = if k == 0 {
-                    self.sim.leaving_distance(from, w.extend(h0), self.margin).unwrap_or(0.0)
-                } else {
-                    0.0
-                };
-                if t > 0.0 {
-                    let len = (w - from.truncate()).length().max(1e-12);
-                    out.push(Step { to: from.truncate().lerp(w, (t / len).min(1.0)).extend(h0), fed: true });
-                }
-                out.push(rapid(w.extend(h0)));
-            }
-            if h0 > s.z + 1e-9 {
-                out.push(rapid(s));
-            }
-            return out;
+            let from = if h0 > e.z + 1e-9 { a.extend(h0) } else { e };
+            let t = way.first().and_then(|w| self.sim.leaving_distance(from, w.extend(h0), self.margin)).unwrap_or(0.0);
+            return at_height(e, s, h0, &way, t);
         }
         lifted
     }
@@ -335,6 +289,30 @@ impl Links<'_> {
             |p, q| self.sim.is_clear(&line(p, q), self.margin) && self.keeps.clear(&line(p, q), z, self.r),
         )
     }
+}
+
+/// The steps of a way at height `h` from `e` to `s` through the places `legs` (the last one
+/// `s`'s): up to `h` when `e` is below it, the first leg fed for its first `t` mm (where the
+/// tool still touches what it touched at `e`), rapids otherwise, down to `s` when it is below.
+fn at_height(e: DVec3, s: DVec3, h: f64, legs: &[DVec2], t: f64) -> Vec<Step> {
+    let rapid = |to: DVec3| Step { to, fed: false };
+    let mut out = Vec::with_capacity(legs.len() + 3);
+    if h > e.z + 1e-9 {
+        out.push(rapid(e.truncate().extend(h)));
+    }
+    let mut from = e.truncate();
+    for (k, w) in legs.iter().enumerate() {
+        if k == 0 && t > 0.0 {
+            let len = (*w - from).length().max(1e-12);
+            out.push(Step { to: from.lerp(*w, (t / len).min(1.0)).extend(h), fed: true });
+        }
+        out.push(rapid(w.extend(h)));
+        from = *w;
+    }
+    if h > s.z + 1e-9 {
+        out.push(rapid(s));
+    }
+    out
 }
 
 fn steps_length(from: DVec3, way: &[Step]) -> f64 {
