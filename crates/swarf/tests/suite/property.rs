@@ -858,16 +858,8 @@ fn mesh_case(seed: u64, dir: &std::path::Path) -> (std::path::PathBuf, String) {
         facets.extend(box_facets([bx, by, 0.0], [bx + bw, by + bh, bz]));
         let _ = write!(what, ", boss at ({bx:.1}, {by:.1}) {bw:.1} × {bh:.1} × {bz:.1}");
     }
-    let mut stl = String::from("solid random\n");
-    for f in &facets {
-        stl += "facet normal 0 0 0\nouter loop\n";
-        for v in f {
-            let _ = writeln!(stl, "vertex {} {} {}", v[0], v[1], v[2]);
-        }
-        stl += "endloop\nendfacet\n";
-    }
-    stl += "endsolid random\n";
-    std::fs::write(dir.join(format!("part{seed}.stl")), stl).expect("write the STL");
+    std::fs::write(dir.join(format!("part{seed}.stl")), crate::common::ascii_stl("random", &facets))
+        .expect("write the STL");
     let d = [4.0, 5.0, 6.0][rng.int(0, 2)];
     let stepdown = rng.range(1.5, 3.0);
     let case = format!(

@@ -38,16 +38,7 @@ fn block_facets() -> Vec<[[f64; 3]; 3]> {
 }
 
 fn write_case(dir: &Path) -> PathBuf {
-    let mut stl = String::from("solid block\n");
-    for t in block_facets() {
-        stl += "facet normal 0 0 0\nouter loop\n";
-        for v in t {
-            stl += &format!("vertex {} {} {}\n", v[0], v[1], v[2]);
-        }
-        stl += "endloop\nendfacet\n";
-    }
-    stl += "endsolid block\n";
-    std::fs::write(dir.join("block.stl"), stl).unwrap();
+    std::fs::write(dir.join("block.stl"), crate::common::ascii_stl("block", &block_facets())).unwrap();
     let case = r#"{"units": "mm", "tool": {"diameter": 6, "type": "flat"},
         "stock_box": [-50, -50, 0, 50, 50, 18], "part_stl": "block.stl",
         "stepdown": 2.0, "stepover": 0.4, "feed_default": 1000, "rapid_rate": 5000}"#;

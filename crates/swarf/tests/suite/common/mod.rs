@@ -1,5 +1,5 @@
-//! Checks shared by the integration tests: what "clean" and "within the bound" mean for a run,
-//! by swarf's own simulator.
+//! What the integration tests share: what "clean" and "within the bound" mean for a run,
+//! by swarf's own simulator, and an ASCII STL writer for the mesh tests.
 
 // (each test binary uses what it needs)
 #![allow(dead_code)]
@@ -26,4 +26,17 @@ pub fn check_bound(what: &str, r: &Report, reference: f64, bad: &mut Vec<String>
     if r.engagement_deg.p99.is_nan() || r.engagement_deg.p99 > bound {
         bad.push(format!("{what}: p99 engagement {:.1}° above {bound}°", r.engagement_deg.p99));
     }
+}
+
+/// An ASCII STL of `facets` (each three vertices), the solid named `name`.
+pub fn ascii_stl(name: &str, facets: &[[[f64; 3]; 3]]) -> String {
+    let mut stl = format!("solid {name}\n");
+    for f in facets {
+        stl += "facet normal 0 0 0\nouter loop\n";
+        for v in f {
+            stl += &format!("vertex {} {} {}\n", v[0], v[1], v[2]);
+        }
+        stl += "endloop\nendfacet\n";
+    }
+    stl + &format!("endsolid {name}\n")
 }
