@@ -179,60 +179,94 @@ pub(crate) fn rest_above(job: &MeshJob, sim: &RasterSim, low: &[f32]) -> Rest {
     r
 }
 
-/// Maximum (`max`) or minimum over the disk of radius `rc` cells around every cell: for each
-/// row offset, a running extreme over the row's chord (van Herk / Gil–Werman, O(1) a cell per
-/// offset). Outside the grid counts as −∞ for the maximum and +∞ for the minimum.
+/// Maximum (`max`) or minimum over the disk of radius `rc` cells around every cell. Outside the
+/// grid counts as −∞ for the maximum and +∞ for the minimum.
+///
+/// The disk is its rows: at row offset `d` it spans the columns `±w(d)`, `w(d) = ⌊√(rc² − d²)⌋`.
+/// Each source row's running extremes over `[i − w, i + w]` are built for `w = 0, 1, …` by
+/// `H₀ = h`, `H₁[i] = ext(h[i−1], h[i], h[i+1])`, `H_{w+1}[i] = ext(H_w[i−1], H_w[i+1])` (the two
+/// windows of width `2w+1` overlap from `w = 1` and together cover `2w+3` columns): one
+/// vectorised pass a width, and each `H_{w(d)}` is folded into the output rows `d` above and
+/// below it. Output rows go in bands of several radii in parallel, each band holding its own
+/// rows, so a band reads every source row once (`(band + 2r) · r` passes for `band · (2r + 1)`
+/// folds). Exact, so the result does not depend on the band size or the thread count. (Written
+/// here: the image-processing crates' grey-level morphology is for 8-bit images and square or
+/// diamond structuring elements, not f32 heights and Euclidean disks.)
 fn disk_filter(h: &[f32], nx: usize, ny: usize, rc: f64, max: bool) -> Vec<f32> {
+    if max { disk_filter_by::<true>(h, nx, ny, rc) } else { disk_filter_by::<false>(h, nx, ny, rc) }
+}
+
+/// The extreme of two heights (the larger for `MAX`); written so that the passes vectorise.
+#[inline(always)]
+fn ext2<const MAX: bool>(a: f32, b: f32) -> f32 {
+    if MAX {
+        if a > b { a } else { b }
+    } else if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+/// [`disk_filter`] for one of the two extremes.
+fn disk_filter_by<const MAX: bool>(h: &[f32], nx: usize, ny: usize, rc: f64) -> Vec<f32> {
     use rayon::prelude::*;
-    let ri = rc.floor() as i64;
-    let ext = if max { f32::NEG_INFINITY } else { f32::INFINITY };
-    let pick = |a: f32, b: f32| if max { a.max(b) } else { a.min(b) };
-    // per distinct half-width w, the running extreme of each row over [i − w, i + w]
-    let widths: Vec<usize> =
-        (-ri..=ri).map(|dy| ((rc * rc - (dy * dy) as f64).max(0.0)).sqrt().floor() as usize).collect();
-    let mut distinct = widths.clone();
-    distinct.sort_unstable();
-    distinct.dedup();
-    let rows: Vec<Vec<Vec<f32>>> = (0..ny)
-        .into_par_iter()
-        .map(|j| {
-            let row = &h[j * nx..(j + 1) * nx];
-            distinct.iter().map(|&w| window(row, w, ext, &pick)).collect()
-        })
-        .collect();
+    let ext = if MAX { f32::NEG_INFINITY } else { f32::INFINITY };
+    if nx == 0 || ny == 0 {
+        return Vec::new();
+    }
+    let ri = rc.max(0.0).floor() as usize;
+    // half-width of the disk's chord at each row offset (non-increasing)
+    let widths: Vec<usize> = (0..=ri).map(|d| ((rc * rc - (d * d) as f64).max(0.0)).sqrt().floor() as usize).collect();
+    let wmax = widths[0];
+    // a row padded by `wmax` cells of `ext` on each side: its running extremes over
+    // `[i − w, i + w]` are right on the columns `w..m − w` of the padded row, which hold the
+    // grid's columns
+    let m = nx + 2 * wmax;
+    let band = (4 * ri).max(32);
     let mut out = vec![ext; nx * ny];
-    out.par_chunks_mut(nx).enumerate().for_each(|(j, o)| {
-        for (t, dy) in (-ri..=ri).enumerate() {
-            let jj = j as i64 + dy;
-            if jj < 0 || jj >= ny as i64 {
-                continue;
-            }
-            let wi = distinct.binary_search(&widths[t]).unwrap_or(0);
-            let src = &rows[jj as usize][wi];
-            for (a, b) in o.iter_mut().zip(src) {
-                *a = pick(*a, *b);
+    out.par_chunks_mut(band * nx).enumerate().for_each(|(b, o)| {
+        let (j0, rows) = (b * band, o.len() / nx);
+        let (mut cur, mut nxt) = (vec![ext; m], vec![ext; m]);
+        let src_lo = j0.saturating_sub(ri);
+        let src_hi = (j0 + rows - 1 + ri).min(ny - 1);
+        for js in src_lo..=src_hi {
+            cur.fill(ext);
+            cur[wmax..wmax + nx].copy_from_slice(&h[js * nx..(js + 1) * nx]);
+            let mut w = 0;
+            // offsets by decreasing distance: their widths rise
+            for d in (0..=ri).rev() {
+                let want = widths[d];
+                while w < want {
+                    if w == 0 {
+                        for i in 1..m - 1 {
+                            nxt[i] = ext2::<MAX>(ext2::<MAX>(cur[i - 1], cur[i]), cur[i + 1]);
+                        }
+                    } else {
+                        for ((n, a), c) in nxt[1..m - 1].iter_mut().zip(&cur[..m - 2]).zip(&cur[2..]) {
+                            *n = ext2::<MAX>(*a, *c);
+                        }
+                    }
+                    std::mem::swap(&mut cur, &mut nxt);
+                    w += 1;
+                }
+                let src = &cur[wmax..wmax + nx];
+                for jo in [js as i64 - d as i64, js as i64 + d as i64] {
+                    let r = jo - j0 as i64;
+                    if r >= 0 && (r as usize) < rows {
+                        let row = &mut o[r as usize * nx..(r as usize + 1) * nx];
+                        for (a, s) in row.iter_mut().zip(src) {
+                            *a = ext2::<MAX>(*a, *s);
+                        }
+                    }
+                    if d == 0 {
+                        break;
+                    }
+                }
             }
         }
     });
     out
-}
-
-/// The extreme of `row` over `[i − w, i + w]` at every `i` (van Herk / Gil–Werman).
-fn window(row: &[f32], w: usize, ext: f32, pick: &dyn Fn(f32, f32) -> f32) -> Vec<f32> {
-    let n = row.len();
-    let k = 2 * w + 1;
-    // padded row: w cells of `ext` on each side
-    let m = n + 2 * w;
-    let at = |i: usize| if i < w || i >= w + n { ext } else { row[i - w] };
-    let mut pre = vec![ext; m];
-    let mut suf = vec![ext; m];
-    for i in 0..m {
-        pre[i] = if i % k == 0 { at(i) } else { pick(pre[i - 1], at(i)) };
-    }
-    for i in (0..m).rev() {
-        suf[i] = if i % k == k - 1 || i == m - 1 { at(i) } else { pick(suf[i + 1], at(i)) };
-    }
-    (0..n).map(|i| pick(suf[i], pre[i + 2 * w])).collect()
 }
 
 #[cfg(test)]
@@ -256,15 +290,36 @@ mod tests {
     }
 
     #[test]
-    fn window_matches_brute_force() {
-        let row: Vec<f32> = (0..37).map(|i| ((i * 7919) % 23) as f32).collect();
-        for w in [0usize, 1, 3, 8, 40] {
-            let got = window(&row, w, f32::NEG_INFINITY, &|a: f32, b: f32| a.max(b));
-            for (i, g) in got.iter().enumerate() {
-                let lo = i.saturating_sub(w);
-                let hi = (i + w).min(row.len() - 1);
-                let want = row[lo..=hi].iter().copied().fold(f32::NEG_INFINITY, f32::max);
-                assert_eq!(*g, want, "w {w} i {i}");
+    fn disk_filter_matches_brute_force() {
+        // seeded heights on grids narrower and wider than the disk, every radius kind
+        let mut seed = 0x2545_f491_u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % 1000) as f32 / 100.0
+        };
+        for (nx, ny) in [(1usize, 1usize), (7, 3), (23, 41), (80, 75)] {
+            let h: Vec<f32> = (0..nx * ny).map(|_| next()).collect();
+            for rc in [0.0, 0.7, 1.0, 2.5, 4.5, 9.99, 30.2] {
+                for max in [true, false] {
+                    let got = disk_filter(&h, nx, ny, rc, max);
+                    for j in 0..ny {
+                        for i in 0..nx {
+                            let mut want = if max { f32::NEG_INFINITY } else { f32::INFINITY };
+                            for jj in 0..ny {
+                                for ii in 0..nx {
+                                    let d2 = (ii as f64 - i as f64).powi(2) + (jj as f64 - j as f64).powi(2);
+                                    if d2 <= rc * rc {
+                                        let v = h[jj * nx + ii];
+                                        want = if max { want.max(v) } else { want.min(v) };
+                                    }
+                                }
+                            }
+                            assert_eq!(got[j * nx + i], want, "{nx}×{ny} rc {rc} max {max} at {i} {j}");
+                        }
+                    }
+                }
             }
         }
     }
