@@ -4,7 +4,7 @@ use super::SimOptions;
 use super::exact::{ExactModel, Query, ToExact};
 use super::grid::{Grid, ceil_i, floor_i};
 use super::replay::{Replay, Rest};
-use super::sweep::{Fast, Path};
+use super::sweep::{Fast, Path, Reach};
 use crate::error::{Error, Result, Setting};
 use crate::geom::index::EdgeIndex;
 use crate::geom::{Area, DVec2, DVec3};
@@ -597,6 +597,7 @@ impl RasterSim {
             let (z0, z1) = path.z_range();
             let zmin = z0.min(z1) as f32;
             let flat = path.is_flat().then(|| (Fast::new(path), z0 as f32));
+            let slope = flat.is_none().then(|| (Reach::new(path, r), Reach::new(path, rs)));
             let st = stadium_of(path, r);
             for j in j0..=j1 {
                 let Some((i0, i1)) = row_columns(&self.grid, st.as_ref(), j, i0, i1) else { continue };
@@ -607,16 +608,14 @@ impl RasterSim {
                     }
                     for i in i0..=i1 {
                         let k = j * self.grid.nx + i;
-                        // (sure >= s everywhere: nothing to do when the path is not below it)
+                        // (sure >= s everywhere: nothing to do when the path is not below it;
+                        // no point of the path is lower than `zmin`)
                         let h = self.link_heights()[k];
-                        if h == f32::NEG_INFINITY {
+                        if h == f32::NEG_INFINITY || h <= zmin {
                             continue;
                         }
                         let q = self.grid.center(i, j);
                         if let Some((f, z)) = &flat {
-                            if *z >= h {
-                                continue;
-                            }
                             let d = f.distance(q);
                             if d <= r {
                                 self.lower(k, *z);
@@ -624,11 +623,11 @@ impl RasterSim {
                             if sure && d <= rs {
                                 self.lower_sure(k, *z);
                             }
-                        } else {
-                            if let Some(z) = path.reach_zmin(q, r) {
+                        } else if let Some((reach, reach_sure)) = &slope {
+                            if let Some(z) = reach.zmin(q) {
                                 self.lower(k, z as f32);
                             }
-                            if sure && let Some(z) = path.reach_zmin(q, rs) {
+                            if sure && let Some(z) = reach_sure.zmin(q) {
                                 self.lower_sure(k, z as f32);
                             }
                         }
@@ -1174,6 +1173,18 @@ impl super::replay::Engine for RasterSim {
 
     fn gouge_depth(&self, path: &Path) -> (f64, DVec3) {
         RasterSim::gouge_depth(self, path)
+    }
+
+    fn gouge_depths(&self, paths: &[Path]) -> Vec<(f64, DVec3)> {
+        // (on the threads the exact model's queries leave free; the part heights and outline
+        // never change, so the answers are those of the replay's own order)
+        paths.par_iter().with_min_len(64).map(|p| RasterSim::gouge_depth(self, p)).collect()
+    }
+
+    fn flush(&mut self) {
+        if let Some(f) = &mut self.feed.0 {
+            f.flush();
+        }
     }
 
     fn cut_move(&mut self, path: &Path) {

@@ -112,6 +112,13 @@ pub(crate) trait Engine {
     }
     /// Gouge depth of a move (0 when clean) and where.
     fn gouge_depth(&self, path: &Path) -> (f64, DVec3);
+    /// [`Engine::gouge_depth`] of every move (an engine whose part never changes may measure
+    /// them after the replay, and in parallel).
+    fn gouge_depths(&self, paths: &[Path]) -> Vec<(f64, DVec3)> {
+        paths.iter().map(|p| self.gouge_depth(p)).collect()
+    }
+    /// The replay has asked for everything: engagements left for later may start.
+    fn flush(&mut self) {}
     /// Cuts a whole move into the material.
     fn cut_move(&mut self, path: &Path);
     /// Volume removed so far, mm³.
@@ -133,6 +140,8 @@ pub(crate) fn run<M: Engine>(m_: &mut M, tp: &Toolpath, progress: &mut dyn FnMut
     let mut entry_arc_center: Option<(DVec2, f64)> = None;
     // samples whose engagement the engine measures after the replay
     let mut later: Vec<usize> = Vec::new();
+    // every move, for the gouge test after the replay (the part does not change)
+    let mut paths: Vec<Path> = Vec::with_capacity(tp.moves.len());
     for (mi, (from, m)) in tp.segments().enumerate() {
         if mi % 256 == 0 {
             progress(mi as f64 / nmoves as f64);
@@ -245,11 +254,14 @@ pub(crate) fn run<M: Engine>(m_: &mut M, tp: &Toolpath, progress: &mut dyn FnMut
                 cum += len3;
             }
         }
-        let (g, at) = m_.gouge_depth(&path);
+        m_.cut_move(&path);
+        paths.push(path);
+    }
+    m_.flush();
+    for (mi, (g, at)) in m_.gouge_depths(&paths).into_iter().enumerate() {
         if g > 0.0 {
             out.gouges.push(Event { move_index: mi, at: at.to_array(), depth: g });
         }
-        m_.cut_move(&path);
     }
     let exact = m_.deferred();
     assert_eq!(exact.len(), later.len(), "an engine answers every engagement it left for later");

@@ -193,6 +193,47 @@ impl Path {
     }
 }
 
+/// [`Path::reach_zmin`] prepared for many cells of one sloping path: a cell within `rho` of the
+/// path's lowest end (by a margin far above rounding) reaches that end's height, and a cell
+/// farther than `rho` from the path in XY (by the same margin) reaches nothing, both without
+/// trigonometry; the cells in between (a thin band, and the far side of a helix) are asked of
+/// [`Path::reach_zmin`]. The answers are the same bits: the tip height is monotone along the
+/// path, so the lowest end gives the least, computed by the same expression.
+#[derive(Debug, Clone, Copy)]
+pub struct Reach {
+    path: Path,
+    fast: Fast,
+    rho: f64,
+    /// The lowest end, and its height as [`Path::reach_zmin`] computes it.
+    low: DVec2,
+    zlow: f64,
+}
+
+/// The margin of [`Reach`]'s shortcuts, mm.
+const REACH_MARGIN: f64 = 1e-7;
+
+impl Reach {
+    /// Prepares `path` for reach queries at `rho`.
+    pub fn new(path: &Path, rho: f64) -> Reach {
+        let (z0, z1) = path.z_range();
+        let t = if z1 < z0 { 1.0 } else { 0.0 };
+        Reach { path: *path, fast: Fast::new(path), rho, low: path.at(t).truncate(), zlow: z0 + (z1 - z0) * t }
+    }
+
+    /// [`Path::reach_zmin`] at `q`.
+    #[inline]
+    pub fn zmin(&self, q: DVec2) -> Option<f64> {
+        let inner = self.rho - REACH_MARGIN;
+        if inner > 0.0 && (q - self.low).length_squared() <= inner * inner {
+            return Some(self.zlow);
+        }
+        if self.fast.distance(q) > self.rho + REACH_MARGIN {
+            return None;
+        }
+        self.path.reach_zmin(q, self.rho)
+    }
+}
+
 /// A path prepared for many distance queries: no trigonometry per query.
 #[derive(Debug, Clone, Copy)]
 pub enum Fast {
@@ -386,5 +427,39 @@ mod tests {
         assert!((a.distance(DVec2::new(0.0, -5.0)) - 125f64.sqrt()).abs() < 1e-12);
         let (lo, hi) = a.bbox(0.0);
         assert!((hi.y - 10.0).abs() < 1e-12 && lo.y.abs() < 1e-12);
+    }
+
+    #[test]
+    fn prepared_reach_gives_the_same_bits() {
+        // ramps up and down, helix turns both ways, a half turn and more, a vertical plunge;
+        // points on a fine lattice over and round each (also on the ends' disks' edges)
+        let arc = |from: DVec3, to: DVec3, ccw: bool| {
+            let m =
+                Move { kind: MoveKind::Cut, motion: Motion::Arc { center: DVec2::new(1.0, 0.5), ccw }, to, feed: 1.0 };
+            Path::of(from, &m)
+        };
+        let paths = [
+            Path::Line { a: DVec3::new(0.0, 0.0, 0.0), b: DVec3::new(7.0, 2.0, -1.5) },
+            Path::Line { a: DVec3::new(0.0, 0.0, -2.0), b: DVec3::new(-3.0, 5.0, 0.5) },
+            Path::Line { a: DVec3::new(1.0, 1.0, 0.0), b: DVec3::new(1.0, 1.0, -3.0) },
+            arc(DVec3::new(3.0, 0.5, 0.0), DVec3::new(-1.0, 0.5, -0.4), true),
+            arc(DVec3::new(3.0, 0.5, -0.4), DVec3::new(1.0, 2.5, 0.0), false),
+            arc(DVec3::new(3.0, 0.5, 0.0), DVec3::new(1.0, -1.5, -0.7), true),
+        ];
+        let mut checked = 0;
+        for path in &paths {
+            for rho in [0.5, 3.0, 4.2] {
+                let reach = Reach::new(path, rho);
+                for i in -90..=90 {
+                    for j in -90..=90 {
+                        let q = DVec2::new(1.0 + i as f64 * 0.0731, 0.5 + j as f64 * 0.0689);
+                        let (fast, slow) = (reach.zmin(q), path.reach_zmin(q, rho));
+                        assert_eq!(fast.map(f64::to_bits), slow.map(f64::to_bits), "{path:?} rho {rho} at {q}");
+                        checked += usize::from(slow.is_some());
+                    }
+                }
+            }
+        }
+        assert!(checked > 100_000, "{checked}");
     }
 }
