@@ -154,8 +154,8 @@ def main():
     area = load_area()
     if area is None:
         print("(FreeCAD's libarea does not import: swarf's columns only)", file=sys.stderr)
-    head = "| case | swarf run s | planned s | proven s | swarf min | swarf cut m | max engagement (ref) |"
-    rule = "|---|---|---|---|---|---|---|"
+    head = "| case | swarf run s | planned s | proven s | swarf min | efficiency | swarf cut m | max engagement (ref) |"
+    rule = "|---|---|---|---|---|---|---|---|"
     if area is not None:
         head += " FreeCAD plan s | run / FreeCAD | FreeCAD cut m | cut / FreeCAD |"
         rule += "---|---|---|---|"
@@ -168,12 +168,13 @@ def main():
             name = os.path.splitext(os.path.basename(path))[0]
             run_s, r = swarf_run(a.swarf, path, a.repeat, tmp)
             cut_m = r["cut_length_mm"] / 1000.0
-            row = "| %s | %.2f | %.2f | %.2f | %.2f | %.2f | %.0f (%.0f) |" % (
+            row = "| %s | %.2f | %.2f | %.2f | %.2f | %.0f %% | %.2f | %.0f (%.0f) |" % (
                 name,
                 run_s,
                 r["compute_s"],
                 r["simulate_s"],
                 r["time_min"],
+                100.0 * r.get("efficiency", 0.0),
                 cut_m,
                 r["engagement_deg"]["max"],
                 r["engagement_ref_deg"],

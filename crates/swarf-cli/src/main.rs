@@ -843,11 +843,12 @@ fn summary(r: &swarf::report::Report) -> String {
         );
     }
     format!(
-        "{} {}: {:.0} mm cut, {:.2} min, engagement max {:.1} p95 {:.1} deg, {} plunges, {} gouges, {} rapid collisions, rest {:.2}%, {:.2} s (planned in {:.2} s, proven in {:.2} s)",
+        "{} {}: {:.0} mm cut, {:.2} min ({:.0}% efficient), engagement max {:.1} p95 {:.1} deg, {} plunges, {} gouges, {} rapid collisions, rest {:.2}%, {:.2} s (planned in {:.2} s, proven in {:.2} s)",
         r.input,
         r.strategy,
         r.cut_length_mm,
         r.time_min,
+        r.efficiency * 100.0,
         r.engagement_deg.max,
         r.engagement_deg.p95,
         r.plunges,

@@ -149,6 +149,14 @@ pub struct Report {
     pub reachable_area_mm2: f64,
     /// Volume removed, mm³.
     pub removed_volume_mm3: f64,
+    /// The removal rate of a straight cut at the reference engagement, a level's depth and the
+    /// programmed feed: stepover × depth of cut × feed, mm³/min.
+    pub removal_rate_ref_mm3_min: f64,
+    /// The program's efficiency: the removed volume over what the machining time would remove at
+    /// [`Report::removal_rate_ref_mm3_min`] (1 = every minute cutting at the reference with no
+    /// links, entries or air; the engagement-driven feed can take it above 1). 0 when not
+    /// simulated.
+    pub efficiency: f64,
     /// Moves by type.
     pub moves: Counts,
     /// Lines of G-code.
@@ -220,6 +228,14 @@ pub fn fill(rep: &mut Report, tp: &Toolpath, replay: &Replay, rest: &Rest, rapid
     rep.reachable_area_mm2 = rest.reachable_mm2;
     rep.rest_fraction = if rest.reachable_mm2 > 0.0 { rest.area_mm2 / rest.reachable_mm2 } else { 0.0 };
     rep.removed_volume_mm3 = replay.removed_volume;
+}
+
+/// Fills the reference removal rate `rate` (mm³/min) and the efficiency it gives the simulated
+/// removed volume and the machining time.
+pub fn fill_efficiency(rep: &mut Report, rate: f64) {
+    rep.removal_rate_ref_mm3_min = rate;
+    let ideal = rep.time_min * rate;
+    rep.efficiency = if ideal > 0.0 { rep.removed_volume_mm3 / ideal } else { 0.0 };
 }
 
 #[cfg(test)]

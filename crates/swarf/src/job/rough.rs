@@ -120,7 +120,7 @@ pub fn rough_planned(
     let compute_s = started.elapsed().as_secs_f64();
     log::info!("{}: {} planned in {compute_s:.2} s, {} moves", job.name, opts.strategy.name(), toolpath.moves.len());
     progress(Stage::Plan, 1.0);
-    let about = About { name: &job.name, what: "", cutting: &job.cutting, floor: job.floor };
+    let about = About { name: &job.name, what: "", cutting: &job.cutting, floor: job.floor, depth: job.level_depth() };
     finish(toolpath, zs, &about, opts, compute_s, progress, |tp, progress| match proof {
         // (the strategy simulated this very program with these settings while planning it)
         Some(p) => Ok(p),
@@ -138,6 +138,8 @@ pub(crate) struct About<'a> {
     pub cutting: &'a Cutting,
     /// The job's floor, mm (the last level when there is none).
     pub floor: f64,
+    /// The depth of cut of a level, mm (for the reference removal rate).
+    pub depth: f64,
 }
 
 /// Posts a planned program and fills its report: from `simulate` (the replay and the rest it
@@ -191,6 +193,7 @@ pub(crate) fn finish(
         rep.simulate_s = t1.elapsed().as_secs_f64();
         log::info!("simulated in {:.2} s", rep.simulate_s);
         report::fill(&mut rep, &toolpath, &rp, &rest, c.rapid_rate);
+        report::fill_efficiency(&mut rep, c.width.stepover() * c.tool.diameter * about.depth * c.feed);
         replay = Some(rp);
     } else {
         report::fill_program(&mut rep, &toolpath, c.rapid_rate);

@@ -143,7 +143,13 @@ pub fn rough(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(Stage,
     let compute_s = t0.elapsed().as_secs_f64();
     log::info!("{}: {} levels planned in {compute_s:.2} s, {} moves", job.name, zs.len(), toolpath.moves.len());
     progress(Stage::Plan, 1.0);
-    let about = About { name: &job.name, what: "z-level roughing, ", cutting: &job.cutting, floor: job.floor };
+    let about = About {
+        name: &job.name,
+        what: "z-level roughing, ",
+        cutting: &job.cutting,
+        floor: job.floor,
+        depth: job.level_depth(),
+    };
     finish(toolpath, zs, &about, opts, compute_s, progress, |tp, progress| {
         let mut sim = crate::sim::heights::mesh_model(job, &opts.sim)?;
         let mut rp = sim.replay(tp, &mut |f| progress(Stage::Simulate, f));

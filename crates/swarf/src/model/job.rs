@@ -137,6 +137,12 @@ impl Job {
         self.cutting.width.stepover() * self.cutting.tool.diameter
     }
 
+    /// The depth of cut of each level, mm: the stock top to the floor (plus floor allowance) over
+    /// the number of levels.
+    pub fn level_depth(&self) -> f64 {
+        (self.stock_top - (self.floor + self.allowance_floor)) / self.levels().len() as f64
+    }
+
     /// The z of each level, top to bottom, ending at the floor (plus floor allowance).
     pub fn levels(&self) -> Vec<f64> {
         let bottom = self.floor + self.allowance_floor;

@@ -121,12 +121,24 @@ impl MeshJob {
         self.levels_every(self.stepdown)
     }
 
+    /// The depth of cut of the even levels, mm (the stock top to the floor over their number;
+    /// the part's flats add levels between them).
+    pub fn level_depth(&self) -> f64 {
+        let (top, bottom) = (self.stock_hi.z, self.floor + self.allowance_floor);
+        (top - bottom) / Self::even_levels(top, bottom, self.stepdown) as f64
+    }
+
+    /// How many even levels of at most `stepdown` from `top` down to `bottom`.
+    fn even_levels(top: f64, bottom: f64, stepdown: f64) -> usize {
+        (((top - bottom) / stepdown) - 1e-9).ceil().max(1.0) as usize
+    }
+
     /// The levels as [`MeshJob::levels`] with step-downs of at most `stepdown`.
     pub fn levels_every(&self, stepdown: f64) -> Vec<f64> {
         let top = self.stock_hi.z;
         // (the floor is protected like the part: with its allowance on top)
         let bottom = self.floor + self.allowance_floor;
-        let n = (((top - bottom) / stepdown) - 1e-9).ceil().max(1.0) as usize;
+        let n = Self::even_levels(top, bottom, stepdown);
         let mut zs: Vec<f64> =
             (1..=n).map(|i| if i == n { bottom } else { top - (top - bottom) * i as f64 / n as f64 }).collect();
         for f in crate::geom::mesh::flats(&self.mesh, 1e-6) {

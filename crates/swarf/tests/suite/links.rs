@@ -79,3 +79,39 @@ fn the_raised_feed_stays_under_the_machines_highest() {
     assert!(top > f && top <= 1.4 * f + 1e-9, "highest feed {top} with the machine's at {}", 1.4 * f);
     assert!(feeds(&job, 1.0).iter().all(|&x| x <= f + 1e-9), "no boost, no cut above the feed");
 }
+
+/// The report's efficiency: the removed volume over what the machining time removes at the
+/// reference engagement (a straight cut at the stepover), a level's depth and the programmed
+/// feed. The engagement-driven feed shortens the same program's time, so it raises the
+/// efficiency; at the programmed feed the links, entries and the passes' lower engagement
+/// keep it under 1.
+#[test]
+fn efficiency_is_the_removed_volume_over_the_reference_rate() {
+    let case = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cases/square_pocket.json");
+    let job = swarf::io::load_job(&case, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
+    let report = |boost: f64| {
+        let mut opts = RoughOptions::DEFAULT;
+        opts.link.feed_boost = boost;
+        rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{e}")).report
+    };
+    let (plain, boosted) = (report(1.0), report(RoughOptions::DEFAULT.link.feed_boost));
+    let levels = job.levels();
+    let depth = (job.stock_top - levels.last().copied().unwrap_or(job.floor)) / levels.len() as f64;
+    let rate = job.stepover_mm() * depth * job.cutting.feed;
+    for r in [&plain, &boosted] {
+        assert!(
+            (r.removal_rate_ref_mm3_min - rate).abs() < 1e-9 * rate,
+            "{} against {rate}",
+            r.removal_rate_ref_mm3_min
+        );
+        let want = r.removed_volume_mm3 / (r.time_min * rate);
+        assert!((r.efficiency - want).abs() < 1e-12, "{} against {want}", r.efficiency);
+    }
+    assert!(plain.efficiency > 0.3 && plain.efficiency < 1.0, "at the programmed feed: {}", plain.efficiency);
+    assert!(
+        boosted.efficiency > 1.05 * plain.efficiency,
+        "{} with the feed raised, {} without",
+        boosted.efficiency,
+        plain.efficiency
+    );
+}
