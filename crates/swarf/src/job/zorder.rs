@@ -133,7 +133,24 @@ fn pieces_of(levels: &[(f64, Toolpath)]) -> Vec<Piece> {
 }
 
 /// The footprint of `piece` on cells of `size` from `origin` (`nx` cells a row), sorted.
+#[cfg(test)]
 fn footprint(piece: &Piece, r: f64, origin: DVec2, size: f64, nx: i64) -> Vec<u32> {
+    footprint_marked(piece, r, origin, size, nx, &mut Marks::default())
+}
+
+/// Cells already in the footprint being built: the mark of the footprint that last took each
+/// cell (a piece's disk covers a hundred cells at every half-cell step, mostly the same ones as
+/// the step before: listing them all and sorting was most of the linking's time).
+#[derive(Default)]
+struct Marks {
+    by_cell: Vec<u32>,
+    now: u32,
+}
+
+/// [`footprint`] with `marks` kept from one footprint to the next.
+fn footprint_marked(piece: &Piece, r: f64, origin: DVec2, size: f64, nx: i64, marks: &mut Marks) -> Vec<u32> {
+    marks.now += 1;
+    let now = marks.now;
     let reach = r + FOOTPRINT_PAD + 0.25 * size;
     let mut cells = Vec::new();
     let mut mark = |p: DVec2| {
@@ -141,7 +158,14 @@ fn footprint(piece: &Piece, r: f64, origin: DVec2, size: f64, nx: i64) -> Vec<u3
         let hi = ((p + reach - origin) / size).floor();
         for j in (lo.y.max(0.0) as i64)..=(hi.y.max(0.0) as i64) {
             for i in (lo.x.max(0.0) as i64)..=(hi.x.max(0.0) as i64).min(nx - 1) {
-                cells.push((j * nx + i) as u32);
+                let c = (j * nx + i) as usize;
+                if c >= marks.by_cell.len() {
+                    marks.by_cell.resize(c + 1, 0);
+                }
+                if marks.by_cell[c] != now {
+                    marks.by_cell[c] = now;
+                    cells.push(c as u32);
+                }
             }
         }
     };
@@ -161,7 +185,6 @@ fn footprint(piece: &Piece, r: f64, origin: DVec2, size: f64, nx: i64) -> Vec<u3
         from = m.to;
     }
     cells.sort_unstable();
-    cells.dedup();
     cells
 }
 
@@ -372,13 +395,20 @@ pub(crate) fn link(
     let reach = how.r + FOOTPRINT_PAD + size;
     let origin = lo - reach;
     let nx = (((hi.x - lo.x) + 2.0 * reach) / size).ceil() as i64 + 2;
-    let mut last: std::collections::HashMap<u32, usize> = std::collections::HashMap::new();
+    // (the last piece on each cell, by cell: usize::MAX for none)
+    let mut last: Vec<usize> = Vec::new();
+    let mut marks = Marks::default();
     let mut need = vec![0usize; pieces.len()];
     let mut followers: Vec<Vec<usize>> = vec![Vec::new(); pieces.len()];
     for (k, p) in pieces.iter().enumerate() {
         let mut before: Vec<usize> = Vec::new();
-        for c in footprint(p, how.r, origin, size, nx) {
-            if let Some(j) = last.insert(c, k) {
+        for c in footprint_marked(p, how.r, origin, size, nx, &mut marks) {
+            let c = c as usize;
+            if c >= last.len() {
+                last.resize(c + 1, usize::MAX);
+            }
+            let j = std::mem::replace(&mut last[c], k);
+            if j != usize::MAX {
                 before.push(j);
             }
         }
