@@ -131,6 +131,9 @@ pub(super) struct Engine<'a, 'b, M: Material> {
     pub(super) failed: Vec<DVec2>,
     /// Blocks of the lateral search that hold reachable material (see [`Engine::lateral`]).
     pub(super) coarse: Vec<bool>,
+    /// Distance in blocks from each block to the nearest block of `coarse`: exact up to the
+    /// lateral search's reach, larger than that beyond it (kept with `coarse`).
+    pub(super) coarse_dist: Vec<f32>,
     pub(super) flags: Vec<bool>,
     pub(super) z: f64,
     pub(super) why: &'static str,
@@ -147,6 +150,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
             resume: Vec::new(),
             failed: Vec::new(),
             coarse: Vec::new(),
+            coarse_dist: Vec::new(),
             flags: Vec::new(),
             z: 0.0,
             why: "",
@@ -189,6 +193,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         self.failed.clear();
         self.relaxed = false;
         self.coarse.clear();
+        self.coarse_dist.clear();
         self.l.sim.begin_level(z);
     }
 

@@ -130,11 +130,12 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         // (a scan of the whole grid per start dominated the planning time)
         let dirty = self.l.sim.take_dirty();
         let mut mat = std::mem::take(&mut self.coarse);
-        let (bi0, bi1, bj0, bj1) = if mat.len() != cx * cy {
+        let fresh = mat.len() != cx * cy;
+        let (bi0, bi1, bj0, bj1) = if fresh {
             mat = vec![false; cx * cy];
             (0, cx - 1, 0, cy - 1)
         } else if let Some((i0, i1, j0, j1)) = dirty {
-            (i0 / f, i1 / f, j0 / f, j1 / f)
+            (i0 / f, (i1 / f).min(cx - 1), j0 / f, (j1 / f).min(cy - 1))
         } else {
             (1, 0, 1, 0) // nothing to read again
         };
@@ -142,8 +143,8 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
             let reach = self.l.sim.reach_mask();
             let h = self.l.sim.heights();
             let thr = (self.z + 0.01) as f32;
-            for bj in bj0..=bj1.min(cy.saturating_sub(1)) {
-                for bi in bi0..=bi1.min(cx.saturating_sub(1)) {
+            for bj in bj0..=bj1 {
+                for bi in bi0..=bi1 {
                     let mut m = false;
                     'block: for j in bj * f..((bj + 1) * f).min(g.ny) {
                         for i in bi * f..((bi + 1) * f).min(g.nx) {
@@ -158,17 +159,37 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
                 }
             }
         }
+        let cell = f as f64 * g.res;
+        // the distance to the material is needed only up to `r + 2.5 cell`, `k` blocks
+        let k = ((self.c.r + 2.5 * cell) / cell).ceil() as usize + 1;
+        // The distance of each block to the material, kept from call to call: material only
+        // goes, so only blocks within `k` of those read again can come nearer than `k` to it
+        // or have been; they are transformed again over a window `k` wider still, which holds
+        // all the material within `k` of them (a transform of the whole grid per start
+        // dominated the planning of large levels with a small tool). A distance up to `k` is
+        // the whole grid's, to the bit; one beyond it stays beyond it.
+        if fresh {
+            self.coarse_dist = edt::distance(&mat, cx, cy);
+        } else if bi0 <= bi1 && bj0 <= bj1 {
+            let (oi0, oi1) = (bi0.saturating_sub(k), (bi1 + k).min(cx - 1));
+            let (oj0, oj1) = (bj0.saturating_sub(k), (bj1 + k).min(cy - 1));
+            let (ei0, ei1) = (oi0.saturating_sub(k), (oi1 + k).min(cx - 1));
+            let (ej0, ej1) = (oj0.saturating_sub(k), (oj1 + k).min(cy - 1));
+            let sx = ei1 - ei0 + 1;
+            let sub: Vec<bool> = (ej0..=ej1).flat_map(|j| mat[j * cx + ei0..=j * cx + ei1].iter().copied()).collect();
+            let dm = edt::distance(&sub, sx, ej1 - ej0 + 1);
+            for j in oj0..=oj1 {
+                let row = (j - ej0) * sx;
+                self.coarse_dist[j * cx + oi0..=j * cx + oi1]
+                    .copy_from_slice(&dm[row + (oi0 - ei0)..=row + (oi1 - ei0)]);
+            }
+        }
         let any = mat.iter().any(|m| *m);
         self.coarse = mat;
         if !any {
             return None;
         }
         let mat = &self.coarse;
-        let cell = f as f64 * g.res;
-        // the distance to the material is needed only up to `r + 2.5 cell`: the transform runs
-        // over the blocks with material and that much around them (late in a level, a few
-        // scraps of a large grid)
-        let k = ((self.c.r + 2.5 * cell) / cell).ceil() as usize + 1;
         let (i0, i1, j0, j1) = {
             let (mut i0, mut i1, mut j0, mut j1) = (cx, 0, cy, 0);
             for (n, _) in mat.iter().enumerate().filter(|(_, m)| **m) {
@@ -177,15 +198,12 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
             }
             (i0.saturating_sub(k), (i1 + k).min(cx - 1), j0.saturating_sub(k), (j1 + k).min(cy - 1))
         };
-        // The candidates nearest the tool first: the transform and the candidates of a window of
-        // blocks round it (the transform over the window grown by `k` blocks, so that its
-        // distances up to `r + 2.5 cell` are those of the whole grid), only those nearer than
-        // any block outside the window and away from the walls; when none of them gives a
-        // start, a window four times as wide, and at last the whole range. The order of the
-        // candidates tried, and so the start found, is the whole range's: each window's list
-        // begins with the one before it (the same candidates in the same order), whose tries
-        // are not made again. (One transform of the whole range per start dominated the
-        // planning of large levels with a small tool.)
+        // The candidates nearest the tool first: those of a window of blocks round it, only
+        // those nearer than any block outside the window and away from the walls; when none of
+        // them gives a start, a window four times as wide, and at last the whole range. The
+        // order of the candidates tried, and so the start found, is the whole range's: each
+        // window's list begins with the one before it (the same candidates in the same
+        // order), whose tries are not made again.
         let cur = self.l.tp.end().truncate();
         let block = |v: f64, lo: f64, a: usize, b: usize| (((v - lo) / cell).floor().max(0.0) as usize).clamp(a, b);
         let (ci, cj) = (block(cur.x, g.x0, i0, i1), block(cur.y, g.y0, j0, j1));
@@ -209,16 +227,10 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
                     .map(|s| s.1)
                     .fold(f64::INFINITY, f64::min)
             };
-            let (ei0, ei1) = (wi0.saturating_sub(k).max(i0), (wi1 + k).min(i1));
-            let (ej0, ej1) = (wj0.saturating_sub(k).max(j0), (wj1 + k).min(j1));
-            let (sx, sy) = (ei1 - ei0 + 1, ej1 - ej0 + 1);
-            let sub: Vec<bool> =
-                (ej0..=ej1).flat_map(|j| self.coarse[j * cx + ei0..=j * cx + ei1].iter().copied()).collect();
-            let dm = edt::distance(&sub, sx, sy);
             let mut cands: Vec<(f64, DVec2)> = Vec::new();
             for j in wj0..=wj1 {
                 for i in wi0..=wi1 {
-                    let d = dm[(j - ej0) * sx + (i - ei0)] as f64 * cell;
+                    let d = self.coarse_dist[j * cx + i] as f64 * cell;
                     // block centres a little more than a radius from the material
                     if d < self.c.r + 0.5 * cell || d > self.c.r + 2.5 * cell {
                         continue;
