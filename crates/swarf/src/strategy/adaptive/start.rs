@@ -13,6 +13,17 @@ use std::f64::consts::{FRAC_PI_2, TAU};
 /// Half the width, in blocks, of the first window the lateral starts are looked for in.
 const LATERAL_WINDOW: usize = 24;
 
+/// The 128 unit directions `τk/128` the material is looked for along (once: their sines and
+/// cosines were a fifth of the lateral search).
+static RING_128: std::sync::LazyLock<Vec<DVec2>> = std::sync::LazyLock::new(|| {
+    (0..128)
+        .map(|k| {
+            let a = TAU * k as f64 / 128.0;
+            DVec2::new(a.cos(), a.sin())
+        })
+        .collect()
+});
+
 impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
     // ---- starting points -------------------------------------------------------------------
 
@@ -191,10 +202,13 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         }
         let mat = &self.coarse;
         let (i0, i1, j0, j1) = {
+            // (row by row: a division per block of material was a tenth of this search)
             let (mut i0, mut i1, mut j0, mut j1) = (cx, 0, cy, 0);
-            for (n, _) in mat.iter().enumerate().filter(|(_, m)| **m) {
-                let (i, j) = (n % cx, n / cx);
-                (i0, i1, j0, j1) = (i0.min(i), i1.max(i), j0.min(j), j1.max(j));
+            for (j, row) in mat.chunks(cx).enumerate() {
+                if let Some(a) = row.iter().position(|m| *m) {
+                    let b = row.iter().rposition(|m| *m).unwrap_or(a);
+                    (i0, i1, j0, j1) = (i0.min(a), i1.max(b), j0.min(j), j1.max(j));
+                }
             }
             (i0.saturating_sub(k), (i1 + k).min(cx - 1), j0.saturating_sub(k), (j1 + k).min(cy - 1))
         };
@@ -254,7 +268,12 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
                         }
                         (dk, p) = best;
                     }
-                    if self.failed[..failed0].iter().any(|f| (*f - p).length() < 1.5 * cell) {
+                    // (the box test first: no square root for the failures far away)
+                    let near_fail = |f: &DVec2| {
+                        let v = *f - p;
+                        v.x.abs() < 1.5 * cell && v.y.abs() < 1.5 * cell && v.length() < 1.5 * cell
+                    };
+                    if self.failed[..failed0].iter().any(near_fail) {
                         continue;
                     }
                     // not tangent to the part (§4.5): starts that are within a tool diameter of the
@@ -376,7 +395,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
     }
 
     /// Mean direction of the material seen on rings up to 3.5 cells of the coarse search larger
-    /// than the tool.
+    /// than the tool ([`RING_128`]).
     pub(super) fn toward_material(&self, p: DVec2) -> Option<f64> {
         let h = self.l.sim.heights();
         let g = self.l.sim.grid();
@@ -384,9 +403,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         for extra in [0.5, 1.0, 2.0, 3.0] {
             let rho = self.c.r + extra * (self.c.r / 4.0).max(g.res);
             let mut sum = DVec2::ZERO;
-            for k in 0..128 {
-                let a = TAU * k as f64 / 128.0;
-                let u = DVec2::new(a.cos(), a.sin());
+            for &u in RING_128.iter() {
                 if let Some((i, j)) = g.cell_of(p + u * rho)
                     && h[j * g.nx + i] > thr
                 {
