@@ -134,6 +134,9 @@ pub(super) struct Engine<'a, 'b, M: Material> {
     /// Distance in blocks from each block to the nearest block of `coarse`: exact up to the
     /// lateral search's reach, larger than that beyond it (kept with `coarse`).
     pub(super) coarse_dist: Vec<f32>,
+    /// The blocks a lateral start may be looked for at (a little more than a radius from the
+    /// material by `coarse_dist`), in row order.
+    pub(super) coarse_band: Vec<u32>,
     pub(super) flags: Vec<bool>,
     pub(super) z: f64,
     pub(super) why: &'static str,
@@ -151,6 +154,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
             failed: Vec::new(),
             coarse: Vec::new(),
             coarse_dist: Vec::new(),
+            coarse_band: Vec::new(),
             flags: Vec::new(),
             z: 0.0,
             why: "",
@@ -194,6 +198,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         self.relaxed = false;
         self.coarse.clear();
         self.coarse_dist.clear();
+        self.coarse_band.clear();
         self.l.sim.begin_level(z);
     }
 

@@ -179,8 +179,10 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         // all the material within `k` of them (a transform of the whole grid per start
         // dominated the planning of large levels with a small tool). A distance up to `k` is
         // the whole grid's, to the bit; one beyond it stays beyond it.
+        let mut redone = None;
         if fresh {
             self.coarse_dist = edt::distance(&mat, cx, cy);
+            redone = Some((0, cx - 1, 0, cy - 1));
         } else if bi0 <= bi1 && bj0 <= bj1 {
             let (oi0, oi1) = (bi0.saturating_sub(k), (bi1 + k).min(cx - 1));
             let (oj0, oj1) = (bj0.saturating_sub(k), (bj1 + k).min(cy - 1));
@@ -194,6 +196,27 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
                 self.coarse_dist[j * cx + oi0..=j * cx + oi1]
                     .copy_from_slice(&dm[row + (oi0 - ei0)..=row + (oi1 - ei0)]);
             }
+            redone = Some((oi0, oi1, oj0, oj1));
+        }
+        // the blocks whose centres stand a little more than a radius from the material, the
+        // candidates' band: kept in row order with the distances, read again where they were
+        let band = |d: f32| {
+            let d = d as f64 * cell;
+            !(d < self.c.r + 0.5 * cell || d > self.c.r + 2.5 * cell)
+        };
+        if let Some((oi0, oi1, oj0, oj1)) = redone {
+            let inside = |n: usize| (oi0..=oi1).contains(&(n % cx)) && (oj0..=oj1).contains(&(n / cx));
+            let mut kept: Vec<u32> = std::mem::take(&mut self.coarse_band);
+            kept.retain(|&n| !inside(n as usize));
+            for j in oj0..=oj1 {
+                for i in oi0..=oi1 {
+                    if band(self.coarse_dist[j * cx + i]) {
+                        kept.push((j * cx + i) as u32);
+                    }
+                }
+            }
+            kept.sort_unstable();
+            self.coarse_band = kept;
         }
         let any = mat.iter().any(|m| *m);
         self.coarse = mat;
@@ -242,13 +265,12 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
                     .fold(f64::INFINITY, f64::min)
             };
             let mut cands: Vec<(f64, DVec2)> = Vec::new();
-            for j in wj0..=wj1 {
-                for i in wi0..=wi1 {
-                    let d = self.coarse_dist[j * cx + i] as f64 * cell;
-                    // block centres a little more than a radius from the material
-                    if d < self.c.r + 0.5 * cell || d > self.c.r + 2.5 * cell {
-                        continue;
-                    }
+            // (the band's blocks in the window, in the order of a scan of its rows)
+            for (i, j) in self.coarse_band.iter().map(|&n| (n as usize % cx, n as usize / cx)) {
+                if i < wi0 || i > wi1 || j < wj0 || j > wj1 {
+                    continue;
+                }
+                {
                     let mut p = DVec2::new(g.x0 + (i as f64 + 0.5) * cell, g.y0 + (j as f64 + 0.5) * cell);
                     let mut dk = self.dk_at(p);
                     if dk < self.c.r + self.c.margin + cell {
