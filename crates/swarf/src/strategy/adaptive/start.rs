@@ -270,41 +270,39 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
                 if i < wi0 || i > wi1 || j < wj0 || j > wj1 {
                     continue;
                 }
-                {
-                    let mut p = DVec2::new(g.x0 + (i as f64 + 0.5) * cell, g.y0 + (j as f64 + 0.5) * cell);
-                    let mut dk = self.dk_at(p);
-                    if dk < self.c.r + self.c.margin + cell {
-                        if !self.relaxed {
-                            continue;
-                        }
-                        // in a channel narrower than two blocks the centres may all miss the strip
-                        // the tool can stand on: the point of the block farthest from the walls
-                        let third = cell / 3.0;
-                        let best = (-1..=1)
-                            .flat_map(|a| (-1..=1).map(move |b| p + DVec2::new(a as f64, b as f64) * third))
-                            .map(|q| (self.dk_at(q), q))
-                            .max_by(|a, b| a.0.total_cmp(&b.0))
-                            .expect("nine points");
-                        if best.0 < self.c.r + self.c.margin + 2.0 * g.res {
-                            continue;
-                        }
-                        (dk, p) = best;
-                    }
-                    // (the box test first: no square root for the failures far away)
-                    let near_fail = |f: &DVec2| {
-                        let v = *f - p;
-                        v.x.abs() < 1.5 * cell && v.y.abs() < 1.5 * cell && v.length() < 1.5 * cell
-                    };
-                    if self.failed[..failed0].iter().any(near_fail) {
+                let mut p = DVec2::new(g.x0 + (i as f64 + 0.5) * cell, g.y0 + (j as f64 + 0.5) * cell);
+                let mut dk = self.dk_at(p);
+                if dk < self.c.r + self.c.margin + cell {
+                    if !self.relaxed {
                         continue;
                     }
-                    // not tangent to the part (§4.5): starts that are within a tool diameter of the
-                    // walls come after all the others, which clear toward the walls first
-                    let near_wall = dk < 3.0 * self.c.r + self.c.margin;
-                    let key = (p - cur).length() + if near_wall { 1e6 } else { 0.0 };
-                    if full || key <= near {
-                        cands.push((key, p));
+                    // in a channel narrower than two blocks the centres may all miss the strip
+                    // the tool can stand on: the point of the block farthest from the walls
+                    let third = cell / 3.0;
+                    let best = (-1..=1)
+                        .flat_map(|a| (-1..=1).map(move |b| p + DVec2::new(a as f64, b as f64) * third))
+                        .map(|q| (self.dk_at(q), q))
+                        .max_by(|a, b| a.0.total_cmp(&b.0))
+                        .expect("nine points");
+                    if best.0 < self.c.r + self.c.margin + 2.0 * g.res {
+                        continue;
                     }
+                    (dk, p) = best;
+                }
+                // (the box test first: no square root for the failures far away)
+                let near_fail = |f: &DVec2| {
+                    let v = *f - p;
+                    v.x.abs() < 1.5 * cell && v.y.abs() < 1.5 * cell && v.length() < 1.5 * cell
+                };
+                if self.failed[..failed0].iter().any(near_fail) {
+                    continue;
+                }
+                // not tangent to the part (§4.5): starts that are within a tool diameter of the
+                // walls come after all the others, which clear toward the walls first
+                let near_wall = dk < 3.0 * self.c.r + self.c.margin;
+                let key = (p - cur).length() + if near_wall { 1e6 } else { 0.0 };
+                if full || key <= near {
+                    cands.push((key, p));
                 }
             }
             cands.sort_by(|a, b| a.0.total_cmp(&b.0));
