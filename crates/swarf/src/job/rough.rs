@@ -193,7 +193,7 @@ pub(crate) fn finish(
         rep.simulate_s = t1.elapsed().as_secs_f64();
         log::info!("simulated in {:.2} s", rep.simulate_s);
         report::fill(&mut rep, &toolpath, &rp, &rest, c.rapid_rate);
-        report::fill_efficiency(&mut rep, c.width.stepover() * c.tool.diameter * about.depth * c.feed);
+        report::fill_efficiency(&mut rep, c.stepover_mm() * about.depth * c.feed);
         replay = Some(rp);
     } else {
         report::fill_program(&mut rep, &toolpath, c.rapid_rate);

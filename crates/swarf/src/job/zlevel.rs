@@ -14,19 +14,10 @@ use super::rough::{About, RoughOptions, RoughResult, Stage, finish};
 use crate::error::{Error, Result, Setting};
 use crate::model::{MeshJob, keep_of};
 use crate::post;
-use crate::sim::raster::RasterSim;
-use crate::sim::sweep::Path;
 use crate::sim::{HeightMap, SimOptions};
 use crate::toolpath::Toolpath;
 use std::sync::Arc;
 use std::time::Instant;
-
-/// Cuts every move of `tp` into `sim` (no measurements).
-fn cut_all(sim: &mut RasterSim, tp: &Toolpath) {
-    for (from, m) in tp.segments() {
-        sim.cut_move(&Path::of(from, m));
-    }
-}
 
 /// Plans the z-level program of `job` (no posting, no simulation).
 pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -> Result<(Toolpath, Vec<f64>)> {
@@ -93,7 +84,7 @@ pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -
         if tp.moves.iter().all(|m| m.is_rapid()) {
             continue;
         }
-        cut_all(&mut state, &tp);
+        state.cut_moves(tp.start, &tp.moves);
         done.push(z);
         levels.push((z, tp));
     }

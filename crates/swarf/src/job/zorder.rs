@@ -493,11 +493,7 @@ pub(crate) fn link(
         for n in &p.notes {
             tp.notes.push(Note { at: base + n.at, text: n.text.clone() });
         }
-        let mut from = tp.end();
-        for m in &p.moves {
-            sim.cut_move(&Path::of(from, m));
-            from = m.to;
-        }
+        sim.cut_moves(tp.end(), &p.moves);
         tp.moves.extend(p.moves.iter().copied());
         cut[k] = true;
         while prefix < pieces.len() && cut[prefix] {

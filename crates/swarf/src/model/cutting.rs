@@ -150,6 +150,11 @@ impl Cutting {
         Ok(())
     }
 
+    /// Radial stepover in mm: the width's stepover fraction of the tool's diameter.
+    pub fn stepover_mm(&self) -> f64 {
+        self.width.stepover() * self.tool.diameter
+    }
+
     /// The machine's highest cutting feed, mm/min ([`Cutting::max_feed`], the rapid rate when
     /// it is not given).
     pub fn max_feed(&self) -> f64 {

@@ -134,7 +134,7 @@ impl Job {
 
     /// Radial stepover in mm.
     pub fn stepover_mm(&self) -> f64 {
-        self.cutting.width.stepover() * self.cutting.tool.diameter
+        self.cutting.stepover_mm()
     }
 
     /// The depth of cut of each level, mm: the stock top to the floor (plus floor allowance) over

@@ -9,7 +9,7 @@ use crate::error::{Error, Result, Setting};
 use crate::geom::index::EdgeIndex;
 use crate::geom::{Area, DVec2, DVec3};
 use crate::model::{Job, Regions};
-use crate::toolpath::Toolpath;
+use crate::toolpath::{Move, Toolpath};
 use rayon::prelude::*;
 
 /// Cell state bits (paper 1 §4: part / stock; fixture; neither = free space).
@@ -597,7 +597,7 @@ impl RasterSim {
             let (z0, z1) = path.z_range();
             let zmin = z0.min(z1) as f32;
             let flat = path.is_flat().then(|| (Fast::new(path), z0 as f32));
-            let slope = flat.is_none().then(|| (Reach::new(path, r), Reach::new(path, rs)));
+            let slope = flat.is_none().then(|| (Reach::new(path, r), sure.then(|| Reach::new(path, rs))));
             let st = stadium_of(path, r);
             for j in j0..=j1 {
                 let Some((i0, i1)) = row_columns(&self.grid, st.as_ref(), j, i0, i1) else { continue };
@@ -627,7 +627,7 @@ impl RasterSim {
                             if let Some(z) = reach.zmin(q) {
                                 self.lower(k, z as f32);
                             }
-                            if sure && let Some(z) = reach_sure.zmin(q) {
+                            if let Some(z) = reach_sure.as_ref().and_then(|rs| rs.zmin(q)) {
                                 self.lower_sure(k, z as f32);
                             }
                         }
@@ -1015,6 +1015,15 @@ impl RasterSim {
         let pieces = (path.xy_length() / (4.0 * self.r)).ceil().max(1.0) as usize;
         for k in 0..pieces {
             self.cut(&path.sub(k as f64 / pieces as f64, (k + 1) as f64 / pieces as f64));
+        }
+    }
+
+    /// Cuts `moves`, the first from `from`, one after the other (no measurements).
+    pub fn cut_moves(&mut self, from: DVec3, moves: &[Move]) {
+        let mut at = from;
+        for m in moves {
+            self.cut_move(&Path::of(at, m));
+            at = m.to;
         }
     }
 
