@@ -187,10 +187,40 @@ impl Job {
             ));
         }
         if reachable.area() < 1e-6 {
+            // the widest place: the material's point farthest from the walls
+            let walls_index = crate::geom::index::EdgeIndex::from_area(&keep, (r / 2.0).max(0.05));
+            let step = (r / 8.0).max(0.01);
+            let widest = farthest_point(&material, &walls_index, step)
+                .map(|(p, d)| {
+                    // refined round the best grid point: a 9 × 9 grid, shrunk four times
+                    let (mut best, mut d, mut h) = (p, d, step);
+                    for _ in 0..4 {
+                        let c = best;
+                        for j in -4..=4 {
+                            for i in -4..=4 {
+                                let q = c + DVec2::new(i as f64, j as f64) * (h / 4.0);
+                                let dq = walls_index.distance(q, 4.0 * r + 1.0);
+                                if dq > d && material.contains(q) {
+                                    (best, d) = (q, dq);
+                                }
+                            }
+                        }
+                        h /= 4.0;
+                    }
+                    2.0 * (d - margin.max(0.0))
+                })
+                .filter(|w| *w > 0.0);
+            let fix = match widest {
+                Some(w) => format!(
+                    "; the widest place is {w:.2} mm across: a tool of Ø{:.2} mm or less fits (--tool-diameter)",
+                    (w * 0.98 * 100.0).floor() / 100.0
+                ),
+                None => String::new(),
+            };
             return Err(Error::job(
                 "tool diameter",
                 format!(
-                    "the tool (Ø{:.3} mm) does not fit anywhere in the material to remove: the pocket is narrower than the tool",
+                    "the tool (Ø{:.3} mm) does not fit anywhere in the material to remove: the pocket is narrower than the tool{fix}",
                     2.0 * r
                 ),
             ));
@@ -223,4 +253,21 @@ pub fn farthest_point(area: &Area, edges: &crate::geom::index::EdgeIndex, step: 
         }
     }
     best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_tool_too_wide_for_every_pocket_names_the_widest_that_fits() {
+        // a 4 mm wide slot in a block: a 6 mm tool fits nowhere
+        let stock = Area::rect(0.0, 0.0, 50.0, 4.0);
+        let part = Area::rect(-20.0, -20.0, 70.0, 24.0).difference(&stock);
+        let job = Job::new("slot", stock, part, 6.0, 2.0);
+        let e = job.regions(job.radius(), 0.0).unwrap_err().to_string();
+        assert!(e.contains("does not fit") && e.contains("the widest place is 4.0"), "{e}");
+        assert!(e.contains("--tool-diameter"), "{e}");
+        assert!(job.regions(1.9, 0.0).is_ok());
+    }
 }
