@@ -97,6 +97,12 @@ pub enum Stage {
 pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64)) -> Result<RoughResult> {
     job.validate()?;
     opts.validate()?;
+    let fitted = job
+        .stock
+        .bounds()
+        .and_then(|(lo, hi)| opts.sim.fitted(job.cutting.tool.diameter, lo, hi))
+        .map(|sim| RoughOptions { sim, ..opts.clone() });
+    let opts = fitted.as_ref().unwrap_or(opts);
     let t0 = Instant::now();
     progress(Stage::Plan, 0.0);
     let planned = plan(job, opts)?.ok_or_else(|| Error::job("strategy", "the strategy found nothing to cut"))?;

@@ -127,6 +127,11 @@ pub fn rough(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(Stage,
             "the distance-field simulator handles 2.5D jobs only; use the raster simulator",
         ));
     }
+    let fitted = opts
+        .sim
+        .fitted(job.cutting.tool.diameter, job.stock_lo.truncate(), job.stock_hi.truncate())
+        .map(|sim| RoughOptions { sim, ..opts.clone() });
+    let opts = fitted.as_ref().unwrap_or(opts);
     let t0 = Instant::now();
     progress(Stage::Plan, 0.0);
     let (mut toolpath, zs) = plan(job, opts, &mut |f| progress(Stage::Plan, f))?;

@@ -207,4 +207,64 @@ impl SimOptions {
     pub fn res_for(&self, d: f64) -> f64 {
         self.res.unwrap_or_else(|| (d / 100.0).clamp(0.02, 0.1))
     }
+
+    /// The coarsest cell chosen for a job too large for [`SimOptions::res_for`]'s, as a
+    /// fraction of the tool's diameter: a tenth still reads the engagement to a few degrees.
+    pub const COARSEST_CELL_PER_DIAMETER: f64 = 0.1;
+
+    /// The options with the cell chosen to fit a job whose stock spans `lo`..`hi` (mm) with a
+    /// tool of diameter `d`: `None` when no cell is given and the tool's cell keeps the grid
+    /// (the span grown by ten radii and 20 mm) within nine tenths of [`SimOptions::max_cells`];
+    /// else the cell coarsened just enough, up to [`SimOptions::COARSEST_CELL_PER_DIAMETER`] of
+    /// the diameter (beyond that the grid stays too large and the model refuses it, naming the
+    /// cell). A cell the user gave is never changed.
+    pub fn fitted(&self, d: f64, lo: geom::DVec2, hi: geom::DVec2) -> Option<SimOptions> {
+        if self.res.is_some() || !(d.is_finite() && d > 0.0) {
+            return None;
+        }
+        let base = self.res_for(d);
+        let span = hi - lo + geom::DVec2::splat(5.0 * d + 20.0);
+        if !(span.x.is_finite() && span.y.is_finite()) {
+            return None;
+        }
+        let budget = 0.9 * self.max_cells as f64;
+        if (span.x / base) * (span.y / base) <= budget {
+            return None;
+        }
+        let need = ((span.x * span.y / budget).sqrt() * 1000.0).ceil() / 1000.0;
+        let res = need.min(Self::COARSEST_CELL_PER_DIAMETER * d);
+        log::warn!(
+            "the job spans {:.0} × {:.0} mm: the simulation's cell is {res:.3} mm instead of {base:.3} mm to keep within {} million cells (--res sets it)",
+            hi.x - lo.x,
+            hi.y - lo.y,
+            self.max_cells / 1_000_000
+        );
+        Some(SimOptions { res: Some(res), ..self.clone() })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::DVec2;
+
+    #[test]
+    fn a_large_job_gets_a_coarser_cell_within_the_budget_and_a_given_cell_stays() {
+        let o = SimOptions::DEFAULT;
+        let lo = DVec2::ZERO;
+        // small: the tool's own cell
+        assert_eq!(o.fitted(6.0, lo, DVec2::new(200.0, 150.0)), None);
+        // 800 × 700 mm with a 6 mm tool: 0.06 mm would be ~1.6e8 cells
+        let f = o.fitted(6.0, lo, DVec2::new(800.0, 700.0)).expect("coarsened");
+        let res = f.res.unwrap();
+        assert!(res > 0.06 && res <= 0.6, "{res}");
+        let span = DVec2::new(800.0, 700.0) + DVec2::splat(5.0 * 6.0 + 20.0);
+        assert!((span.x / res) * (span.y / res) <= 0.9 * o.max_cells as f64);
+        // never coarser than a tenth of the tool: beyond, the model refuses the grid
+        let huge = o.fitted(6.0, lo, DVec2::new(1e5, 1e5)).unwrap();
+        assert!((huge.res.unwrap() - 0.6).abs() < 1e-12, "{:?}", huge.res);
+        // the user's cell is theirs
+        let given = SimOptions { res: Some(0.05), ..o };
+        assert_eq!(given.fitted(6.0, lo, DVec2::new(800.0, 700.0)), None);
+    }
 }
