@@ -278,8 +278,12 @@ pub fn svg(f: &Figure) -> String {
         r#"<text x="20" y="634" font-size="11">0°</text><text x="452" y="634" font-size="11" text-anchor="end">180°</text><text x="470" y="620" font-size="11">engagement; grey: no engagement; dotted: rapids; red: material left</text>"#
     );
     let arcs = f.toolpath.moves.iter().filter(|m| matches!(m.motion, Motion::Arc { .. })).count();
-    let _ =
-        writeln!(o, r#"<text x="840" y="30" font-size="13">{} moves, {} arcs</text>"#, f.toolpath.moves.len(), arcs);
+    let _ = writeln!(
+        o,
+        r##"<text x="20" y="50" font-size="13" fill="#555">{} moves, {} arcs</text>"##,
+        f.toolpath.moves.len(),
+        arcs
+    );
     o.push_str("</svg>\n");
     o
 }
