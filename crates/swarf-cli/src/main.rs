@@ -84,7 +84,7 @@ struct PlacementOpts {
     /// Units of a drawing (DXF, SVG) or an STL part read on its own, whatever the file says.
     #[arg(long, value_enum)]
     units: Option<UnitsArg>,
-    /// STL part on its own: scale (25.4 for inches; `--units` works too).
+    /// Drawing, or STL part on its own: scale (25.4 for inches; `--units` works too).
     #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
     part_scale: Option<f64>,
     /// STL part on its own: rotations about X, Y and Z in degrees, in that order (−90,0,0 turns a
@@ -225,6 +225,22 @@ struct CommonOpts {
     /// Tolerance for joining loose drawing entities into contours, mm.
     #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     chain_tolerance: Option<f64>,
+    /// Drawings without STOCK or PART layers: what to cut. auto: outlines holding holes are
+    /// parts (holes and outside cut), a rectangle round everything is the stock's edge, lone
+    /// outlines are pockets; all: parts, holes and outside; outside: parts cut out, holes left;
+    /// holes: only the holes; pockets: every outline a pocket wall, nested ones islands.
+    #[arg(long, value_parser = PossibleValuesParser::new(swarf::io::drawing::Cut::NAMES))]
+    cut: Option<String>,
+    /// Drawings: leave out contours that stay open after chaining (each is listed) and cut the
+    /// rest.
+    #[arg(long)]
+    skip_open: bool,
+    /// Drawings: read only these layers (DXF) or groups (SVG, by label or id), comma-separated.
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    layers: Vec<String>,
+    /// Drawings: leave out these layers or groups, comma-separated.
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    ignore_layers: Vec<String>,
     #[command(flatten)]
     place: PlacementOpts,
     /// No progress bar.
@@ -421,7 +437,7 @@ fn library_defaults() -> Vec<(&'static str, &'static str, String)> {
             (cmd, "arc_tolerance", num(l.arc_tol)),
             (cmd, "clearance", num(l.clearance)),
             (cmd, "sim", SimEngine::default().name().to_string()),
-            (cmd, "svg_dpi", num(o.import.svg_px_per_inch)),
+            (cmd, "svg_dpi", "96 (90 for files Inkscape before 0.92 wrote)".to_string()),
             (cmd, "chain_tolerance", num(o.import.chain_tolerance)),
             (cmd, "stock_margin", num(o.stock_margin)),
             (cmd, "stock_above", num(o.stock_above)),
@@ -542,11 +558,17 @@ fn overrides(o: &CommonOpts) -> Result<Overrides, Failure> {
         ..placement(&o.place)?
     };
     if let Some(d) = o.svg_dpi {
-        ov.import.svg_px_per_inch = d;
+        ov.import.svg_px_per_inch = Some(d);
     }
     if let Some(t) = o.chain_tolerance {
         ov.import.chain_tolerance = t;
     }
+    if let Some(c) = &o.cut {
+        ov.cut = swarf::io::drawing::Cut::parse(c).unwrap_or_default();
+    }
+    ov.import.skip_open = o.skip_open;
+    ov.import.layers = o.layers.clone();
+    ov.import.ignore_layers = o.ignore_layers.clone();
     Ok(ov)
 }
 
@@ -862,9 +884,15 @@ fn summary(r: &swarf::report::Report) -> String {
 }
 
 fn rough(a: RoughArgs) -> Result<(), Failure> {
-    let input = swarf::io::load_input(&a.input, &overrides(&a.opts)?)?;
+    let (input, reading) = swarf::io::read_input(&a.input, &overrides(&a.opts)?)?;
     let name = a.input.file_name().and_then(|s| s.to_str()).unwrap_or("input").to_string();
     let opts = options(&a.opts, name)?;
+    if !a.opts.quiet {
+        eprintln!("{}", reading.line(&input));
+        for w in &reading.warnings {
+            eprintln!("swarf: warning: {w}");
+        }
+    }
     let stem = match &input {
         Input::Flat(j) => j.name.clone(),
         Input::Mesh(j) => j.name.clone(),

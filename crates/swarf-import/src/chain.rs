@@ -260,6 +260,28 @@ fn twins(
     twin
 }
 
+impl OpenChain {
+    /// One line for the user: its ends, length and first pieces, e.g. `open contour from
+    /// (23.000, 109.000) to (83.000, 109.000), 172.0 mm, of LINE at line 2074 and 5 more`.
+    pub fn describe(&self) -> String {
+        let vs = &self.contour.vertices;
+        let (a, b) = match (vs.first(), vs.last()) {
+            (Some(a), Some(b)) => ([a.x, a.y], [b.x, b.y]),
+            _ => return "an empty open contour".into(),
+        };
+        let length: f64 = vs.windows(2).map(|w| (w[1].x - w[0].x).hypot(w[1].y - w[0].y)).sum();
+        let first = self.origins.first().map(String::as_str).unwrap_or("?");
+        let more = match self.origins.len() {
+            0 | 1 => String::new(),
+            n => format!(" and {} more", n - 1),
+        };
+        format!(
+            "open contour from ({:.3}, {:.3}) to ({:.3}, {:.3}), about {length:.1} mm, of {first}{more}",
+            a[0], a[1], b[0], b[1]
+        )
+    }
+}
+
 /// Builds the message for chains left open: `(place, reason)`, e.g.
 /// `("near (23.000, 109.000)", "open contour: 2 gaps (3.000 mm between … [LINE at line 812 /
 /// LINE at line 830]; …); join the ends or raise the chaining tolerance")`. Coordinates are

@@ -42,8 +42,8 @@ pub fn read_dxf(path: &Path, bytes: &[u8], opts: &ImportOptions) -> Result<Drawi
     let pairs = tokenize(path, &text)?;
     let file = split_sections(path, &pairs)?;
 
-    let units = match opts.units {
-        Some(u) => u,
+    let (units, units_from, units_assumed) = match opts.units {
+        Some(u) => (u, "given".to_string(), false),
         None => header_units(path, &file.header)?,
     };
     let scale = units.mm();
@@ -70,7 +70,16 @@ pub fn read_dxf(path: &Path, bytes: &[u8], opts: &ImportOptions) -> Result<Drawi
     type Group = (Role, Vec<Piece>, Vec<(String, usize)>);
     let mut by_role: Vec<Group> = Vec::new();
     let mut geometry = 0usize;
+    let mut layers: Vec<String> = Vec::new();
+    let mut left_out = 0usize;
     for (index, mut p) in pieces.into_iter().enumerate() {
+        if !layers.contains(&p.layer) {
+            layers.push(p.layer.clone());
+        }
+        if !opts.reads_layer([p.layer.as_str()]) {
+            left_out += 1;
+            continue;
+        }
         p.contour.scale(scale);
         if !p.contour.is_finite() {
             return Err(ImportError::new(
@@ -121,11 +130,24 @@ pub fn read_dxf(path: &Path, bytes: &[u8], opts: &ImportOptions) -> Result<Drawi
         open.extend(result.open);
     }
 
-    if let Some((place, reason)) = chain::open_contour_message(&open) {
-        return Err(ImportError::new(path, place, reason));
+    let mut skipped = Vec::new();
+    if opts.skip_open {
+        skipped.extend(open.iter().map(chain::OpenChain::describe));
+    } else if let Some((place, reason)) = chain::open_contour_message(&open) {
+        return Err(ImportError::new(
+            path,
+            place,
+            format!("{reason}, or skip open contours (--skip-open) to cut the rest"),
+        ));
     }
     if shapes.is_empty() {
         let mut reason = String::from("no closed contour in the drawing");
+        if left_out > 0 {
+            reason.push_str(&format!(
+                " on the layers read ({left_out} entities on other layers; the drawing's layers: {})",
+                layers.join(", ")
+            ));
+        }
         if geometry == 0 {
             reason.push_str(": it has no lines, arcs, circles, polylines, splines or ellipses");
         }
@@ -139,7 +161,15 @@ pub fn read_dxf(path: &Path, bytes: &[u8], opts: &ImportOptions) -> Result<Drawi
         return Err(ImportError::new(path, "drawing", reason));
     }
     shapes.sort_by_key(|(k, _)| *k);
-    Ok(Drawing { path: path.to_path_buf(), units, shapes: shapes.into_iter().map(|(_, s)| s).collect() })
+    Ok(Drawing {
+        path: path.to_path_buf(),
+        units,
+        units_from,
+        units_assumed,
+        shapes: shapes.into_iter().map(|(_, s)| s).collect(),
+        skipped,
+        layers,
+    })
 }
 
 // ------------------------------------------------------------------------------------------
@@ -445,25 +475,27 @@ impl<'a> Ent<'a> {
     }
 }
 
-/// The units `$INSUNITS` asks for.
-fn header_units(path: &Path, header: &[Pair]) -> Result<Units, ImportError> {
+/// The units `$INSUNITS` asks for, where they came from, and whether they are a guess.
+fn header_units(path: &Path, header: &[Pair]) -> Result<(Units, String, bool), ImportError> {
+    let assumed = |why: &str| Ok((Units::Millimetre, why.to_string(), true));
     let Some(k) = header.iter().position(|p| p.code == 9 && p.value.eq_ignore_ascii_case("$INSUNITS")) else {
-        return Ok(Units::Millimetre);
+        return assumed("no $INSUNITS");
     };
     let Some(p) = header.get(k + 1).filter(|p| p.code == 70) else {
-        return Ok(Units::Millimetre);
+        return assumed("no $INSUNITS");
     };
     let place = format!("header $INSUNITS at line {}", p.line);
     let v = integer(p).map_err(|e| ImportError::new(path, place.clone(), e))?;
+    let said = |u: Units| Ok((u, format!("$INSUNITS = {v}"), false));
     let unsupported = match v {
-        0 => return Ok(Units::Millimetre), // unitless
-        1 => return Ok(Units::Inch),
-        2 => return Ok(Units::Foot),
-        4 => return Ok(Units::Millimetre),
-        5 => return Ok(Units::Centimetre),
-        6 => return Ok(Units::Metre),
-        9 => return Ok(Units::Mil),
-        13 => return Ok(Units::Micrometre),
+        0 => return assumed("$INSUNITS = 0 (unitless)"),
+        1 => return said(Units::Inch),
+        2 => return said(Units::Foot),
+        4 => return said(Units::Millimetre),
+        5 => return said(Units::Centimetre),
+        6 => return said(Units::Metre),
+        9 => return said(Units::Mil),
+        13 => return said(Units::Micrometre),
         3 => "miles",
         7 => "kilometres",
         8 => "microinches",

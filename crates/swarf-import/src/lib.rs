@@ -118,8 +118,18 @@ pub struct Drawing {
     pub path: PathBuf,
     /// The units the file was in (already converted to mm in `shapes`).
     pub units: Units,
+    /// Where `units` came from, or why they were assumed, for the user (`$INSUNITS = 1`,
+    /// `no $INSUNITS`, `given`, …).
+    pub units_from: String,
+    /// True when the file names no unit and `units` is a guess.
+    pub units_assumed: bool,
     /// Its closed contours.
     pub shapes: Vec<Shape>,
+    /// The open contours left out ([`ImportOptions::skip_open`]), each with its place and gaps.
+    pub skipped: Vec<String>,
+    /// The layers (DXF) or groups (SVG) that held geometry, in file order, before any was left
+    /// out by [`ImportOptions::layers`] or [`ImportOptions::ignore_layers`].
+    pub layers: Vec<String>,
 }
 
 /// Options for reading drawings.
@@ -133,14 +143,39 @@ pub struct ImportOptions {
     /// Largest distance (mm) between a curve that cannot be kept exactly (spline, ellipse,
     /// Bézier) and the lines that replace it. Default 0.002 mm.
     pub flatten_tolerance: f64,
-    /// SVG user units per inch (CSS: 96; Inkscape 0.47/0.48 used 90). Default 96.
-    pub svg_px_per_inch: f64,
+    /// SVG user units per inch (CSS: 96; Inkscape before 0.92 used 90). `None`: 96, or 90 for
+    /// a file whose `inkscape:version` is older than 0.92.
+    pub svg_px_per_inch: Option<f64>,
+    /// Leave out contours that stay open after chaining (listed in [`Drawing::skipped`])
+    /// instead of refusing the drawing.
+    pub skip_open: bool,
+    /// Read only these layers (DXF) or groups (SVG, by label or id, at any depth), any case;
+    /// empty: all of them.
+    pub layers: Vec<String>,
+    /// Leave out these layers or groups, any case.
+    pub ignore_layers: Vec<String>,
 }
 
 impl ImportOptions {
-    /// The units the file says, 0.01 mm chaining, 0.002 mm flattening, 96 SVG pixels per inch.
-    pub const DEFAULT: ImportOptions =
-        ImportOptions { units: None, chain_tolerance: 0.01, flatten_tolerance: 0.002, svg_px_per_inch: 96.0 };
+    /// The units the file says, 0.01 mm chaining, 0.002 mm flattening, SVG pixels per inch as the file's writer meant them,
+    /// open contours refused, every layer read.
+    pub const DEFAULT: ImportOptions = ImportOptions {
+        units: None,
+        chain_tolerance: 0.01,
+        flatten_tolerance: 0.002,
+        svg_px_per_inch: None,
+        skip_open: false,
+        layers: Vec::new(),
+        ignore_layers: Vec::new(),
+    };
+
+    /// Whether geometry under these layer or group names is read ([`ImportOptions::layers`],
+    /// [`ImportOptions::ignore_layers`]; names compared trimmed and in any case).
+    pub fn reads_layer<'a>(&self, names: impl IntoIterator<Item = &'a str> + Clone) -> bool {
+        let is = |want: &String, n: &str| want.trim().eq_ignore_ascii_case(n.trim());
+        let named = |list: &[String]| names.clone().into_iter().any(|n| list.iter().any(|w| is(w, n)));
+        (self.layers.is_empty() || named(&self.layers)) && !named(&self.ignore_layers)
+    }
 }
 
 impl Default for ImportOptions {

@@ -106,9 +106,10 @@ pub fn read_svg(path: &Path, bytes: &[u8], opts: &ImportOptions) -> Result<Drawi
             ids.entry(id.to_string()).or_insert(n.id());
         }
     }
+    let ppi = opts.svg_px_per_inch.unwrap_or_else(|| if legacy_inkscape(root) { 90.0 } else { 96.0 });
     let abs_mm_to_user = match opts.units {
         Some(u) => 1.0 / u.mm(),
-        None => opts.svg_px_per_inch / 25.4,
+        None => ppi / 25.4,
     };
     let mut r = Reader {
         file: path,
@@ -116,13 +117,16 @@ pub fn read_svg(path: &Path, bytes: &[u8], opts: &ImportOptions) -> Result<Drawi
         opts,
         abs_mm_to_user,
         ids,
+        ppi,
         use_stack: Vec::new(),
         uses: 0,
         vertices: 0,
         shapes: Vec::new(),
         open: Vec::new(),
+        skipped: Vec::new(),
+        layers: Vec::new(),
     };
-    let (map, vp, units) = r.root_mapping(root)?;
+    let (map, vp, units, units_from, units_assumed) = r.root_mapping(root)?;
     if display_none(root) {
         return Err(err("drawing", "the root <svg> is hidden (display:none): no closed contour in the drawing".into()));
     }
@@ -132,6 +136,7 @@ pub fn read_svg(path: &Path, bytes: &[u8], opts: &ImportOptions) -> Result<Drawi
         role: Role::Auto,
         role_fixed: false,
         layer: String::new(),
+        groups: Vec::new(),
         visible: true,
         via: String::new(),
     };
@@ -144,9 +149,30 @@ pub fn read_svg(path: &Path, bytes: &[u8], opts: &ImportOptions) -> Result<Drawi
     r.children(root, &ctx, 0)?;
     r.close_open_pieces()?;
     if r.shapes.is_empty() {
-        return Err(err("drawing", "no closed contour in the drawing".into()));
+        let mut reason = String::from("no closed contour in the drawing");
+        if !(opts.layers.is_empty() && opts.ignore_layers.is_empty()) {
+            let names: Vec<&str> = r.layers.iter().map(|l| if l.is_empty() { "(none)" } else { l }).collect();
+            reason.push_str(&format!(" on the groups read (the drawing's groups: {})", names.join(", ")));
+        }
+        return Err(err("drawing", reason));
     }
-    Ok(Drawing { path: path.to_path_buf(), units, shapes: r.shapes })
+    Ok(Drawing {
+        path: path.to_path_buf(),
+        units,
+        units_from,
+        units_assumed,
+        shapes: r.shapes,
+        skipped: r.skipped,
+        layers: r.layers,
+    })
+}
+
+/// Whether the file was written by Inkscape before 0.92, which drew at 90 px per inch (its
+/// `inkscape:version`, e.g. `0.48.3 r9886`).
+fn legacy_inkscape(root: Node) -> bool {
+    let Some(v) = root.attribute((INKSCAPE_NS, "version")) else { return false };
+    let mut parts = v.split(|c: char| !c.is_ascii_digit()).map(|p| p.parse::<u32>().ok());
+    matches!((parts.next().flatten(), parts.next().flatten()), (Some(0), Some(minor)) if minor < 92)
 }
 
 /// Whether the XML declaration names a single-byte Latin encoding (ISO-8859-1, Windows-1252), which
@@ -163,8 +189,10 @@ fn check_options(opts: &ImportOptions) -> Result<(), String> {
     if !(opts.flatten_tolerance.is_finite() && opts.flatten_tolerance > 0.0) {
         return Err(format!("flatten_tolerance must be a positive number of mm, not {}", opts.flatten_tolerance));
     }
-    if !(opts.svg_px_per_inch.is_finite() && opts.svg_px_per_inch > 0.0) {
-        return Err(format!("svg_px_per_inch must be a positive number, not {}", opts.svg_px_per_inch));
+    if let Some(ppi) = opts.svg_px_per_inch
+        && !(ppi.is_finite() && ppi > 0.0)
+    {
+        return Err(format!("svg_px_per_inch must be a positive number, not {ppi}"));
     }
     if !(opts.chain_tolerance.is_finite() && opts.chain_tolerance >= 0.0) {
         return Err(format!("chain_tolerance must be zero or a positive number of mm, not {}", opts.chain_tolerance));
@@ -534,6 +562,8 @@ struct Ctx {
     /// A STOCK/PART/FIXTURE group is above: `layer` is its name and stays.
     role_fixed: bool,
     layer: String,
+    /// Labels and ids of the groups above, outermost first (for [`ImportOptions::layers`]).
+    groups: Vec<String>,
     visible: bool,
     /// ` via use id="…" (line n)` for instances.
     via: String,
@@ -553,11 +583,17 @@ struct Reader<'a, 'input> {
     /// User units per millimetre for lengths with absolute units (`mm`, `in`, …).
     abs_mm_to_user: f64,
     ids: HashMap<String, NodeId>,
+    /// SVG user units (px) per inch.
+    ppi: f64,
     use_stack: Vec<NodeId>,
     uses: usize,
     /// Vertices built so far.
     vertices: usize,
     shapes: Vec<Shape>,
+    /// Open contours left out ([`ImportOptions::skip_open`]).
+    skipped: Vec<String>,
+    /// Groups that held geometry (their layer names), in file order.
+    layers: Vec<String>,
     open: Vec<OpenPiece>,
 }
 
@@ -737,9 +773,9 @@ impl<'a, 'input> Reader<'a, 'input> {
     }
 
     /// The root user space → output mm (Y flipped about the page bottom), the root viewport in
-    /// user units, and the drawing's units.
-    fn root_mapping(&self, root: Node) -> Result<(Affine, [f64; 2], Units), ImportError> {
-        let px_mm = 25.4 / self.opts.svg_px_per_inch;
+    /// user units, the drawing's units, where they came from and whether they are a guess.
+    fn root_mapping(&self, root: Node) -> Result<(Affine, [f64; 2], Units, String, bool), ImportError> {
+        let px_mm = 25.4 / self.ppi;
         let w = self.root_len(root, "width")?;
         let h = self.root_len(root, "height")?;
         let vb = self.viewbox(root)?;
@@ -791,7 +827,14 @@ impl<'a, 'input> Reader<'a, 'input> {
         if !map.is_finite() || map.det() == 0.0 {
             return Err(self.err(self.describe(root), "the page size and viewBox give no usable scale"));
         }
-        Ok((map, vp, self.opts.units.unwrap_or(file_units)))
+        let abs = matches!(w, RootLen::Abs(..)) || matches!(h, RootLen::Abs(..));
+        let writer = if legacy_inkscape(root) { ", as Inkscape before 0.92 drew" } else { "" };
+        let (from, assumed) = match (self.opts.units, vb.is_some() && abs) {
+            (Some(_), _) => ("given".to_string(), false),
+            (None, true) => ("the page's width and height with its viewBox".to_string(), false),
+            (None, false) => (format!("user units as pixels at {} per inch{writer}", self.ppi), true),
+        };
+        Ok((map, vp, self.opts.units.unwrap_or(file_units), from, assumed))
     }
 
     fn children(&mut self, n: Node, ctx: &Ctx, depth: usize) -> Result<(), ImportError> {
@@ -955,6 +998,12 @@ impl<'a, 'input> Reader<'a, 'input> {
             self.vertices += contour.vertices.len();
             if !contour.is_finite() {
                 return Err(self.err(origin, "the coordinates overflow (not finite after the transforms)"));
+            }
+            if !self.layers.contains(&ctx.layer) {
+                self.layers.push(ctx.layer.clone());
+            }
+            if !self.opts.reads_layer(ctx.groups.iter().map(String::as_str)) {
+                continue;
             }
             if contour.closed {
                 if contour.vertices.len() >= 2 && contour.signed_area().abs() >= MIN_AREA {
@@ -1122,8 +1171,10 @@ impl<'a, 'input> Reader<'a, 'input> {
             return Ok(());
         }
         let pieces = std::mem::take(&mut self.open);
-        let (closed, report) = chain_pieces(pieces, self.opts.chain_tolerance);
-        if let Some((place, reason)) = report {
+        let (closed, report, each) = chain_pieces(pieces, self.opts.chain_tolerance);
+        if self.opts.skip_open {
+            self.skipped = each;
+        } else if let Some((place, reason)) = report {
             return Err(self.err(place, reason));
         }
         for s in closed {
@@ -1139,6 +1190,7 @@ impl<'a, 'input> Reader<'a, 'input> {
 fn enter_group(n: Node, ctx: &mut Ctx) {
     let label = n.attribute((INKSCAPE_NS, "label"));
     let id = n.attribute("id");
+    ctx.groups.extend([label, id].into_iter().flatten().map(str::to_string));
     for name in [label, id].into_iter().flatten() {
         let role = Role::from_layer_name(name);
         if role != Role::Auto {
@@ -1183,9 +1235,12 @@ fn ellipse_path(cx: f64, cy: f64, rx: f64, ry: f64) -> SubPath {
     sp
 }
 
-/// Joins open pieces end to end with [`crate::chain::chain`]. Returns the closed shapes and,
-/// when some outline stays open, the error's place and reason.
-fn chain_pieces(pieces: Vec<OpenPiece>, tol: f64) -> (Vec<Shape>, Option<(String, String)>) {
+/// The closed shapes, the error's place and reason when some outline stays open, and a line for
+/// each chain left open.
+type Chaining = (Vec<Shape>, Option<(String, String)>, Vec<String>);
+
+/// Joins open pieces end to end with [`crate::chain::chain`].
+fn chain_pieces(pieces: Vec<OpenPiece>, tol: f64) -> Chaining {
     let mut roles: HashMap<String, (Role, String)> = HashMap::new();
     let mut input = Vec::with_capacity(pieces.len());
     for p in pieces {
@@ -1218,10 +1273,12 @@ fn chain_pieces(pieces: Vec<OpenPiece>, tol: f64) -> (Vec<Shape>, Option<(String
         (
             place,
             format!(
-                "{reason}. A pocket outline must be closed: close the path (Z), or delete or hide \
-                 (display:none) open strokes such as construction lines"
+                "{reason}. A pocket outline must be closed: close the path (Z), delete or hide \
+                 (display:none) open strokes such as construction lines, or skip open contours \
+                 (--skip-open) to cut the rest"
             ),
         )
     });
-    (shapes, report)
+    let each = chained.open.iter().map(crate::chain::OpenChain::describe).collect();
+    (shapes, report, each)
 }

@@ -29,8 +29,10 @@ fn swarf(dir: &Path, args: &[&str]) -> Output {
 }
 
 /// `swarf rough INPUT -o out.ngc --report out.json EXTRA…` in `dir` must fail with exit code
-/// `code`, one line on stderr (`swarf: …`) that contains every one of `needles`, no panic, and
-/// no new file in `dir`. Returns the message.
+/// `code`, one line of error on stderr (`swarf: …`, the last) that contains every one of
+/// `needles`, no panic, and no new file in `dir`. Before it only the line saying what was read
+/// (`read …`) and warnings may come: an input that cannot be read gets the error alone.
+/// Returns the message.
 fn expect_failure(dir: &TempDir, input: &Path, extra: &[&str], code: i32, needles: &[&str]) -> String {
     let before = dir.listing();
     let mut args = vec!["rough", input.to_str().expect("utf-8 path"), "-o", "out.ngc", "--report", "out.json"];
@@ -41,8 +43,14 @@ fn expect_failure(dir: &TempDir, input: &Path, extra: &[&str], code: i32, needle
     assert!(!stderr.contains("panicked"), "{what}: panicked:\n{stderr}");
     assert_eq!(out.status.code(), Some(code), "{what}: exit status (stderr: {stderr:?})");
     let lines: Vec<&str> = stderr.lines().collect();
-    assert_eq!(lines.len(), 1, "{what}: expected one line on stderr, got {stderr:?}");
-    let msg = lines[0];
+    let (msg, printed_before) = lines.split_last().unwrap_or_else(|| panic!("{what}: nothing on stderr"));
+    for l in printed_before {
+        assert!(
+            l.starts_with("read ") || l.starts_with("swarf: warning: ") || l.contains(" WARN "),
+            "{what}: expected one line of error on stderr, got {stderr:?}"
+        );
+    }
+    assert!(printed_before.len() <= 3, "{what}: {stderr:?}");
     assert!(msg.starts_with("swarf: "), "{what}: {msg:?}");
     for n in needles {
         assert!(msg.to_lowercase().contains(&n.to_lowercase()), "{what}: the message does not contain {n:?}: {msg:?}");
@@ -408,8 +416,9 @@ fn rough_writes_every_output() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
-    // without a terminal: no progress bar, just the one-line summary
-    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    // without a terminal: no progress bar, just what was read and the one-line summary
+    assert_eq!(stderr.lines().count(), 2, "{stderr}");
+    assert!(stderr.starts_with("read case 50.0 × 50.0 mm, 3.00 mm deep; tool Ø5 mm"), "{stderr}");
     assert!(stderr.contains("square_pocket.json") && stderr.contains("0 gouges"), "{stderr}");
     let p = |n: &str| d.path().join(n);
     check_outputs(&p("X.ngc"), &p("X.json"), &p("X.svg"), &p("X.png"));
@@ -486,4 +495,51 @@ fn plan_errors() {
         }
     }
     assert_eq!(dir.listing(), before, "files were left behind");
+}
+
+#[test]
+fn a_drawing_is_read_as_meant_and_said_before_planning() {
+    let d = TempDir::new("drawing-intent");
+    // a bracket with a hole, and a construction stroke left open
+    let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" width="80mm" height="60mm" viewBox="0 0 80 60">
+        <path d="M 5 5 L 75 5 L 75 25 L 30 25 L 30 55 L 5 55 Z"/><circle cx="17" cy="15" r="6"/>
+        <path d="M 40 40 L 70 50"/></svg>"#;
+    let input = d.path().join("bracket.svg");
+    std::fs::write(&input, svg).expect("write");
+    let m = expect_failure(&d, &input, &[], 2, &["bracket.svg", "open contour", "--skip-open"]);
+    assert!(m.contains("path"), "{m}");
+    let out = swarf(
+        d.path(),
+        &["rough", "bracket.svg", "-o", "b.ngc", "--skip-open", "--tool-diameter", "3", "--no-simulate"],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert!(lines[0].starts_with("read drawing 70.0 × 50.0 mm, 3.00 mm deep (millimetres: "), "{stderr}");
+    assert!(lines[0].contains("2 contours; 1 open left out; 1 part, 1 pocket; tool Ø3 mm"), "{stderr}");
+    assert!(lines[0].contains("holes and outside cut"), "{stderr}");
+    assert!(lines[1].starts_with("swarf: warning: left out: open contour from (40.000, "), "{stderr}");
+    // asked otherwise, said so
+    let out = swarf(
+        d.path(),
+        &[
+            "rough",
+            "bracket.svg",
+            "-o",
+            "c.ngc",
+            "--skip-open",
+            "--tool-diameter",
+            "3",
+            "--no-simulate",
+            "--cut",
+            "pockets",
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success() && stderr.contains("1 pocket, 1 island") && stderr.contains("pockets: as asked"),
+        "{stderr}"
+    );
+    let bad = swarf(d.path(), &["rough", "bracket.svg", "--cut", "inside"]);
+    assert_eq!(bad.status.code(), Some(2));
 }

@@ -648,7 +648,12 @@ fn open_contour_is_refused_with_its_gaps() {
         e.reason.contains("3.000 mm between (80.000, 109.000) and (83.000, 109.000) [LINE (handle 6E) at line "),
         "{e}"
     );
-    assert!(e.reason.ends_with("join the ends or raise the chaining tolerance"), "{e}");
+    assert!(
+        e.reason.ends_with(
+            "join the ends or raise the chaining tolerance, or skip open contours (--skip-open) to cut the rest"
+        ),
+        "{e}"
+    );
     // the line numbers point at the entities
     let line_of_63 = text.lines().position(|l| l.trim() == "LINE").unwrap() + 1;
     assert!(e.reason.contains(&format!("[LINE (handle 63) at line {line_of_63} /")), "{e}");
@@ -834,4 +839,52 @@ fn damaged_real_drawings_never_panic() {
         }
         let _ = read_dxf(&path, &m, &opts);
     }
+}
+
+// ---- layers, open contours left out, units' source ------------------------------------------
+
+/// A closed square on layer CUT, an open hatch stroke on layer HATCH.
+fn cut_and_hatch() -> String {
+    let sq = [[0.0, 0.0], [40.0, 0.0], [40.0, 30.0], [0.0, 30.0]];
+    let mut e = String::new();
+    for i in 0..4 {
+        e += &line_on("CUT", sq[i], sq[(i + 1) % 4]);
+    }
+    e += &line_on("HATCH", [5.0, 5.0], [35.0, 25.0]);
+    doc(&insunits(4), "", &e)
+}
+
+#[test]
+fn an_open_contour_is_refused_with_the_option_that_skips_it() {
+    let e = read(&cut_and_hatch()).unwrap_err();
+    assert!(e.reason.contains("open contour") && e.reason.contains("--skip-open"), "{e}");
+    let d = read_with(&cut_and_hatch(), &ImportOptions { skip_open: true, ..Default::default() }).unwrap();
+    assert_eq!(d.shapes.len(), 1);
+    assert_eq!(d.skipped.len(), 1);
+    assert!(d.skipped[0].starts_with("open contour from (5.000, 5.000) to (35.000, 25.000)"), "{:?}", d.skipped);
+}
+
+#[test]
+fn layers_are_chosen_or_left_out_in_any_case() {
+    for opts in [
+        ImportOptions { ignore_layers: vec!["hatch".into()], ..Default::default() },
+        ImportOptions { layers: vec!["Cut".into()], ..Default::default() },
+    ] {
+        let d = read_with(&cut_and_hatch(), &opts).unwrap();
+        assert_eq!((d.shapes.len(), d.skipped.len()), (1, 0));
+        assert_eq!(d.layers, vec!["CUT".to_string(), "HATCH".to_string()]);
+    }
+    let e = read_with(&cut_and_hatch(), &ImportOptions { layers: vec!["ENGRAVE".into()], ..Default::default() })
+        .unwrap_err();
+    assert!(e.reason.contains("the drawing's layers: CUT, HATCH"), "{e}");
+}
+
+#[test]
+fn the_units_say_where_they_came_from() {
+    let d = read_ok(&doc(&insunits(1), "", &circle("0", [0.0, 0.0], 1.0)));
+    assert_eq!((d.units, d.units_from.as_str(), d.units_assumed), (Units::Inch, "$INSUNITS = 1", false));
+    let d = read_ok(&doc("", "", &circle("0", [0.0, 0.0], 1.0)));
+    assert_eq!((d.units, d.units_from.as_str(), d.units_assumed), (Units::Millimetre, "no $INSUNITS", true));
+    let d = read_ok(&doc(&insunits(0), "", &circle("0", [0.0, 0.0], 1.0)));
+    assert!(d.units_assumed && d.units_from.contains("unitless"));
 }

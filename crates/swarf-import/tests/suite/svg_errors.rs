@@ -121,7 +121,7 @@ fn invalid_options() {
     for opts in [
         ImportOptions { flatten_tolerance: 0.0, ..Default::default() },
         ImportOptions { flatten_tolerance: f64::NAN, ..Default::default() },
-        ImportOptions { svg_px_per_inch: -96.0, ..Default::default() },
+        ImportOptions { svg_px_per_inch: Some(-96.0), ..Default::default() },
         ImportOptions { chain_tolerance: f64::INFINITY, ..Default::default() },
     ] {
         let e = read_svg(Path::new("bad.svg"), svg.as_bytes(), &opts).unwrap_err();

@@ -275,7 +275,7 @@ fn px_documents_at_96_and_90_px_per_inch() {
     let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" width="354.33071" height="230.31496">
         <rect width="354.33071" height="230.31496"/></svg>"#;
     let d96 = read(svg);
-    let d90 = read_opts(svg, &ImportOptions { svg_px_per_inch: 90.0, ..Default::default() });
+    let d90 = read_opts(svg, &ImportOptions { svg_px_per_inch: Some(90.0), ..Default::default() });
     assert_bounds(&d96.shapes[0].contour, [0.0, 0.0, 93.75, 60.9375], 1e-4);
     assert_bounds(&d90.shapes[0].contour, [0.0, 0.0, 100.0, 65.0], 1e-4);
     // a unit override: one user unit is one millimetre
@@ -504,7 +504,7 @@ fn pocket_with_two_round_islands_at_90_px_per_inch() {
   </g>
 </svg>"#
     );
-    let d90 = read_opts(&svg, &ImportOptions { svg_px_per_inch: 90.0, ..Default::default() });
+    let d90 = read_opts(&svg, &ImportOptions { svg_px_per_inch: Some(90.0), ..Default::default() });
     assert_eq!(d90.shapes.len(), 3);
     let areas: Vec<f64> = d90.shapes.iter().map(|s| s.contour.signed_area()).collect();
     assert_close(areas[0].abs(), 6500.0, 1e-6, "outer rectangle");
@@ -536,4 +536,43 @@ fn loose_lines_are_chained() {
     let d = read(&mm_doc(100.0, 100.0, r#"<path d="M 10 10 H 50 V 40 H 10 V 10.005"/>"#));
     assert!(d.shapes[0].contour.closed);
     assert_eq!(d.shapes[0].contour.vertices.len(), 4);
+}
+
+#[test]
+fn groups_are_chosen_by_label_or_id_at_any_depth() {
+    let body = r#"<g inkscape:label="Cut" id="layer1"><g id="g7"><rect x="0" y="0" width="10" height="10"/></g></g>
+                  <g inkscape:label="Hatch"><rect x="20" y="0" width="10" height="10"/><path d="M 20 0 L 30 10"/></g>"#;
+    let doc = mm_doc(40.0, 20.0, body);
+    let only_cut = read_opts(&doc, &ImportOptions { layers: vec!["cut".into()], ..Default::default() });
+    assert_eq!(only_cut.shapes.len(), 1);
+    let by_id = read_opts(&doc, &ImportOptions { layers: vec!["g7".into()], ..Default::default() });
+    assert_eq!(by_id.shapes.len(), 1);
+    let no_hatch = read_opts(&doc, &ImportOptions { ignore_layers: vec!["HATCH".into()], ..Default::default() });
+    assert_eq!((no_hatch.shapes.len(), no_hatch.skipped.len()), (1, 0));
+    // all of it: the open stroke is refused, or left out when asked
+    let e = read_svg(Path::new("test.svg"), doc.as_bytes(), &ImportOptions::default()).unwrap_err();
+    assert!(e.reason.contains("--skip-open"), "{e}");
+    let skip = read_opts(&doc, &ImportOptions { skip_open: true, ..Default::default() });
+    assert_eq!((skip.shapes.len(), skip.skipped.len()), (2, 1));
+}
+
+#[test]
+fn old_inkscape_files_are_read_at_90_pixels_per_inch() {
+    let doc = |version: &str| {
+        format!(
+            r#"<svg xmlns="http://www.w3.org/2000/svg" xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape" inkscape:version="{version}" width="210mm" height="297mm"><rect x="0" y="0" width="90" height="90"/></svg>"#
+        )
+    };
+    let side = |d: &Drawing| {
+        let b = bounds(&d.shapes[0].contour);
+        b[2] - b[0]
+    };
+    let old = read(&doc("0.48.3 r9886"));
+    assert!((side(&old) - 25.4).abs() < 1e-9, "{}", side(&old));
+    assert!(old.units_assumed && old.units_from.contains("90 per inch"), "{}", old.units_from);
+    let new = read(&doc("1.2.2 (b0a8486541, 2022-12-01)"));
+    assert!((side(&new) - 90.0 * 25.4 / 96.0).abs() < 1e-9);
+    // given, the pixels per inch win
+    let given = read_opts(&doc("0.48.3 r9886"), &ImportOptions { svg_px_per_inch: Some(96.0), ..Default::default() });
+    assert!((side(&given) - side(&new)).abs() < 1e-12);
 }

@@ -21,7 +21,7 @@ fn load_shared_svg_files() {
     files.sort();
     for f in files.iter().filter(|f| f.extension().is_some_and(|e| e == "svg")) {
         for ppi in [96.0, 90.0] {
-            let opts = ImportOptions { svg_px_per_inch: ppi, ..Default::default() };
+            let opts = ImportOptions { svg_px_per_inch: Some(ppi), ..Default::default() };
             match read_drawing(f, &opts) {
                 Ok(d) => {
                     let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];

@@ -40,6 +40,8 @@ pub struct Overrides {
     /// Stock above an STL part read on its own, mm: 0 (the default) puts the stock's top at
     /// the part's, so that no level faces a top nobody asked to face.
     pub stock_above: f64,
+    /// What of a drawing without role layers is cut ([`drawing::Cut`]).
+    pub cut: drawing::Cut,
 }
 
 impl Overrides {
@@ -61,6 +63,7 @@ impl Overrides {
         placement: Placement::IDENTITY,
         stock_margin: 2.0,
         stock_above: 0.0,
+        cut: drawing::Cut::Auto,
     };
 
     /// Checks every value given: the same ranges as the job's own ([`Cutting::validate`],
@@ -77,7 +80,7 @@ impl Overrides {
             (Setting::Depth, self.depth, "mm: the depth must be positive"),
             (Setting::Feed, self.feed, "mm/min: the feed must be positive"),
             (Setting::SpindleSpeed, self.spindle_rpm, "rpm: the spindle speed must be positive"),
-            (Setting::SvgDpi, Some(self.import.svg_px_per_inch), "px per inch: must be positive"),
+            (Setting::SvgDpi, self.import.svg_px_per_inch, "px per inch: must be positive"),
             (Setting::FlattenTolerance, Some(self.import.flatten_tolerance), "mm: must be positive"),
         ];
         for (setting, v, what) in positive {
@@ -163,6 +166,127 @@ impl Default for Overrides {
     }
 }
 
+/// What swarf made of an input, for the user before anything is planned: its size and units
+/// (and why those units), what its contours were read as, and warnings where the file looks
+/// meant otherwise (with the option that fixes it). [`Reading::line`] writes it as one line.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Reading {
+    /// What the input is (`drawing`, `case`, `3D case`, `STL part`).
+    pub kind: &'static str,
+    /// Size in mm: the drawing's or part's extents in X, Y and Z (a drawing's Z is the depth cut).
+    pub size_mm: [f64; 3],
+    /// The units assumed and why (`inches: $INSUNITS = 1`).
+    pub units: String,
+    /// Closed contours read (drawings).
+    pub contours: usize,
+    /// Open contours left out (drawings, `--skip-open`).
+    pub skipped: usize,
+    /// Triangles read (STL parts).
+    pub triangles: usize,
+    /// Parts (outlines cut round or holding holes), pockets and islands read (drawings without
+    /// role layers).
+    pub parts: usize,
+    /// Pockets read.
+    pub pockets: usize,
+    /// Islands read.
+    pub islands: usize,
+    /// What of the drawing is cut, once decided.
+    pub cut: Option<drawing::Cut>,
+    /// What was inferred, and why, in words.
+    pub inferred: Vec<String>,
+    /// What looks meant otherwise, each with the option that fixes it.
+    pub warnings: Vec<String>,
+}
+
+/// The name of a unit in words.
+fn unit_name(u: swarf_import::Units) -> &'static str {
+    use swarf_import::Units as U;
+    match u {
+        U::Millimetre => "millimetres",
+        U::Centimetre => "centimetres",
+        U::Metre => "metres",
+        U::Inch => "inches",
+        U::Foot => "feet",
+        U::Mil => "thousandths of an inch",
+        U::Micrometre => "micrometres",
+    }
+}
+
+/// The largest extent under which a file with no unit is suspected of inches (mm), and under
+/// which it is suspected of metres.
+const INCH_SUSPECT_MM: f64 = 15.0;
+const METRE_SUSPECT_MM: f64 = 1.0;
+
+/// A warning when a size read in millimetres from a file with no unit looks like another unit.
+fn unit_warning(largest_mm: f64) -> Option<String> {
+    if largest_mm.is_nan() || largest_mm <= 0.0 {
+        return None;
+    }
+    let (unit, flag, k) = if largest_mm < METRE_SUSPECT_MM {
+        ("metres", "m", 1000.0)
+    } else if largest_mm < INCH_SUSPECT_MM {
+        ("inches", "in", 25.4)
+    } else {
+        return None;
+    };
+    Some(format!(
+        "it is only {largest_mm:.2} mm across as millimetres: if it is in {unit} ({:.0} mm), give --units {flag}",
+        largest_mm * k
+    ))
+}
+
+impl Reading {
+    /// One line: what was read, the tool and the width of cut, what was inferred.
+    pub fn line(&self, input: &Input) -> String {
+        let c = match input {
+            Input::Flat(j) => &j.cutting,
+            Input::Mesh(j) => &j.cutting,
+        };
+        let [x, y, z] = self.size_mm;
+        let size = match input {
+            Input::Flat(_) => format!("{x:.1} × {y:.1} mm, {z:.2} mm deep"),
+            Input::Mesh(_) => format!("{x:.1} × {y:.1} × {z:.1} mm"),
+        };
+        let mut what = Vec::new();
+        if self.triangles > 0 {
+            what.push(format!("{} triangles", self.triangles));
+        }
+        if self.contours > 0 {
+            what.push(format!("{} contours", self.contours));
+        }
+        if self.skipped > 0 {
+            what.push(format!("{} open left out", self.skipped));
+        }
+        let parts = [(self.parts, "part"), (self.pockets, "pocket"), (self.islands, "island")];
+        let counts: Vec<String> = parts
+            .iter()
+            .filter(|(n, _)| *n > 0)
+            .map(|(n, w)| format!("{n} {w}{}", if *n == 1 { "" } else { "s" }))
+            .collect();
+        if !counts.is_empty() {
+            what.push(counts.join(", "));
+        }
+        let mut line = format!("read {} {size}", self.kind);
+        if !self.units.is_empty() {
+            line.push_str(&format!(" ({})", self.units));
+        }
+        if !what.is_empty() {
+            line.push_str(&format!(": {}", what.join("; ")));
+        }
+        line.push_str(&format!(
+            "; tool Ø{} mm, stepover {:.0}% ({:.1} mm, reference engagement {:.1}°)",
+            c.tool.diameter,
+            c.width.stepover() * 100.0,
+            c.stepover_mm(),
+            c.width.engagement_deg()
+        ));
+        for i in &self.inferred {
+            line.push_str(&format!("; {i}"));
+        }
+        line
+    }
+}
+
 /// What a case describes: a 2.5D job (polygons) or a 3D one (a mesh in a stock box).
 #[derive(Debug, Clone)]
 pub enum Input {
@@ -216,7 +340,13 @@ pub fn load_job(path: &Path, ov: &Overrides) -> Result<Job> {
 /// # Ok::<(), swarf::Error>(())
 /// ```
 pub fn load_input(path: &Path, ov: &Overrides) -> Result<Input> {
+    read_input(path, ov).map(|(input, _)| input)
+}
+
+/// [`load_input`], and what was read and inferred ([`Reading`]).
+pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
     ov.validate()?;
+    let mut reading = Reading::default();
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let is_stl = ext == "stl" || (ext != "json" && ext != "dxf" && ext != "svg" && sniff_stl(path));
     let is_case = !is_stl && (ext == "json" || (ext != "dxf" && ext != "svg" && sniff_json(path)));
@@ -226,6 +356,20 @@ pub fn load_input(path: &Path, ov: &Overrides) -> Result<Input> {
         place.scale *= ov.import.units.map_or(1.0, |u| u.mm());
         mesh.transform(&place);
         let (lo, hi) = mesh.bounds().ok_or_else(|| Error::input(path, "file", "the mesh is empty"))?;
+        reading.kind = "STL part";
+        reading.triangles = mesh.tris.len();
+        let size = hi - lo;
+        reading.size_mm = size.to_array();
+        reading.units = match ov.import.units {
+            Some(u) => format!("{} as given", unit_name(u)),
+            None => "millimetres assumed: an STL file names no unit".into(),
+        };
+        if ov.import.units.is_none() && ov.placement.scale == 1.0 {
+            reading.warnings.extend(unit_warning(size.max_element()));
+        }
+        if ov.placement.rotate_deg == [0.0; 3] {
+            reading.warnings.extend(stl::orientation_warning(&mesh));
+        }
         let m = ov.stock_margin;
         if hi.z + ov.stock_above <= lo.z {
             return Err(Error::input(
@@ -240,11 +384,39 @@ pub fn load_input(path: &Path, ov: &Overrides) -> Result<Input> {
             (DVec3::new(lo.x - m, lo.y - m, lo.z), DVec3::new(hi.x + m, hi.y + m, hi.z + ov.stock_above));
         Input::Mesh(Box::new(MeshJob::new(name, mesh, stock_lo, stock_hi, cutting)))
     } else if is_case {
-        case::read_input(path)?
+        let input = case::read_input(path)?;
+        match &input {
+            Input::Flat(j) => {
+                reading.kind = "case";
+                if let Some((lo, hi)) = j.stock.union(&j.part).bounds() {
+                    reading.size_mm = [hi.x - lo.x, hi.y - lo.y, j.stock_top - j.floor];
+                }
+            }
+            Input::Mesh(j) => {
+                reading.kind = "3D case";
+                reading.size_mm = (j.stock_hi - j.stock_lo).to_array();
+            }
+        }
+        input
     } else {
-        Input::Flat(Box::new(drawing::job_from_drawing(&swarf_import::read_drawing(path, &ov.import)?, ov)?))
+        let d = swarf_import::read_drawing(path, &ov.import)?;
+        let (job, r) = drawing::job_and_reading(&d, ov)?;
+        reading = Reading { kind: "drawing", skipped: d.skipped.len(), ..r };
+        let how = if d.units_assumed { " assumed" } else { "" };
+        reading.units = format!("{}{how}: {}", unit_name(d.units), d.units_from);
+        if d.units_assumed
+            && d.path.extension().is_some_and(|e| e.eq_ignore_ascii_case("dxf"))
+            && ov.placement.scale == 1.0
+        {
+            let [x, y, _] = reading.size_mm;
+            reading.warnings.extend(unit_warning(x.max(y)));
+        }
+        for s in &d.skipped {
+            reading.warnings.push(format!("left out: {s}"));
+        }
+        Input::Flat(Box::new(job))
     };
-    Ok(match input {
+    let input = match input {
         Input::Flat(mut job) => {
             ov.apply_to_job(&mut job);
             job.validate()?;
@@ -255,7 +427,8 @@ pub fn load_input(path: &Path, ov: &Overrides) -> Result<Input> {
             job.validate()?;
             Input::Mesh(job)
         }
-    })
+    };
+    Ok((input, reading))
 }
 
 fn head(path: &Path) -> Vec<u8> {
@@ -281,4 +454,97 @@ fn sniff_stl(path: &Path) -> bool {
                 let n = u32::from_le_bytes([h[80], h[81], h[82], h[83]]) as u64;
                 m.len() == 84 + 50 * n
             }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A closed box from the origin to `s` as an ASCII STL.
+    fn box_stl(s: [f64; 3]) -> String {
+        let c = |i: usize| [(i & 1) as f64 * s[0], ((i >> 1) & 1) as f64 * s[1], ((i >> 2) & 1) as f64 * s[2]];
+        let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+        let mut t = String::from("solid box\n");
+        for q in quads {
+            for tri in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+                t += "facet normal 0 0 0\nouter loop\n";
+                for v in tri {
+                    let p = c(v);
+                    t += &format!("vertex {} {} {}\n", p[0], p[1], p[2]);
+                }
+                t += "endloop\nendfacet\n";
+            }
+        }
+        t + "endsolid box\n"
+    }
+
+    fn read_text(name: &str, text: &str, ov: &Overrides) -> Result<(Input, Reading)> {
+        let dir = std::env::temp_dir().join(format!("swarf-reading-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let r = read_input(&path, ov);
+        std::fs::remove_file(&path).ok();
+        r
+    }
+
+    #[test]
+    fn a_y_up_plate_is_named_and_the_rotation_that_lays_it_flat() {
+        let (_, r) = read_text("yup.stl", &box_stl([100.0, 10.0, 60.0]), &Overrides::DEFAULT).unwrap();
+        assert!(
+            r.warnings.iter().any(|w| w.contains("face Y") && w.contains("--part-rotate 90,0,0")),
+            "{:?}",
+            r.warnings
+        );
+        // laid flat, or turned by the user: no warning
+        let (_, r) = read_text("flat.stl", &box_stl([100.0, 60.0, 10.0]), &Overrides::DEFAULT).unwrap();
+        assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+        let turned = Overrides {
+            placement: crate::geom::mesh::Placement { rotate_deg: [90.0, 0.0, 0.0], ..Default::default() },
+            ..Overrides::DEFAULT
+        };
+        let (_, r) = read_text("yup2.stl", &box_stl([100.0, 10.0, 60.0]), &turned).unwrap();
+        assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+        // a tower, as thin in X as in Y, is left alone
+        let (_, r) = read_text("tower.stl", &box_stl([20.0, 20.0, 60.0]), &Overrides::DEFAULT).unwrap();
+        assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    }
+
+    #[test]
+    fn an_inch_part_read_as_millimetres_is_named_with_the_option() {
+        let (input, r) = read_text("small.stl", &box_stl([4.0, 2.5, 1.4]), &Overrides::DEFAULT).unwrap();
+        assert!(r.warnings.iter().any(|w| w.contains("--units in") && w.contains("102 mm")), "{:?}", r.warnings);
+        assert!(
+            r.line(&input).starts_with("read STL part 4.0 × 2.5 × 1.4 mm (millimetres assumed"),
+            "{}",
+            r.line(&input)
+        );
+        let inches = Overrides {
+            import: swarf_import::ImportOptions { units: Some(swarf_import::Units::Inch), ..Default::default() },
+            ..Overrides::DEFAULT
+        };
+        let (_, r) = read_text("small2.stl", &box_stl([4.0, 2.5, 1.4]), &inches).unwrap();
+        assert!(r.warnings.is_empty() && r.units.starts_with("inches"), "{r:?}");
+        // a DXF with no unit, a few mm across
+        let dxf = "0\nSECTION\n2\nENTITIES\n0\nCIRCLE\n8\n0\n10\n2\n20\n2\n30\n0\n40\n1.5\n0\nENDSEC\n0\nEOF\n";
+        let (_, r) =
+            read_text("small.dxf", dxf, &Overrides { tool_diameter: Some(1.0), ..Overrides::DEFAULT }).unwrap();
+        assert!(r.units.starts_with("millimetres assumed"), "{}", r.units);
+        assert!(r.warnings.iter().any(|w| w.contains("--units in")), "{:?}", r.warnings);
+    }
+
+    #[test]
+    fn the_line_says_size_counts_tool_and_width_of_cut() {
+        let dxf = "0\nSECTION\n2\nHEADER\n9\n$INSUNITS\n70\n4\n0\nENDSEC\n0\nSECTION\n2\nENTITIES\n\
+                   0\nLWPOLYLINE\n8\n0\n90\n4\n70\n1\n10\n0\n20\n0\n10\n80\n20\n0\n10\n80\n20\n50\n10\n0\n20\n50\n\
+                   0\nCIRCLE\n8\n0\n10\n20\n20\n25\n30\n0\n40\n5\n0\nENDSEC\n0\nEOF\n";
+        let (input, r) = read_text("plate.dxf", dxf, &Overrides::DEFAULT).unwrap();
+        let line = r.line(&input);
+        assert!(
+            line.starts_with("read drawing 80.0 × 50.0 mm, 3.00 mm deep (millimetres: $INSUNITS = 4): 2 contours"),
+            "{line}"
+        );
+        assert!(line.contains("1 pocket") && line.contains("tool Ø6 mm, stepover 40% (2.4 mm"), "{line}");
+        assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    }
 }

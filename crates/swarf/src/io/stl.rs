@@ -22,6 +22,40 @@ use std::path::Path;
 /// Relative area below which a facet counts as degenerate (of the square of its longest edge).
 const DEGENERATE: f64 = 1e-12;
 
+/// A warning when the part's flat faces mostly face sideways (X or Y) rather than up: a part
+/// drawn Y-up (or X-up) would be roughed standing on its edge. Flat faces are those whose
+/// normal is within 2.6° of an axis; sideways must have at least 1.5 times the area facing Z,
+/// and the part must be thinnest along that axis (under 0.8 of its other extents: a tower,
+/// thin in X and Y alike, is left alone).
+pub fn orientation_warning(mesh: &Mesh) -> Option<String> {
+    let (lo, hi) = mesh.bounds()?;
+    let ext = hi - lo;
+    let mut by_axis = [0.0f64; 3];
+    for [a, b, c] in &mesh.tris {
+        let n = (*b - *a).cross(*c - *a);
+        let len = n.length();
+        if len.is_nan() || len <= 0.0 {
+            continue;
+        }
+        let u = n / len;
+        for (k, s) in by_axis.iter_mut().enumerate() {
+            if u[k].abs() > 0.999 {
+                *s += 0.5 * len;
+            }
+        }
+    }
+    let (k, side) = if by_axis[1] >= by_axis[0] { (1, by_axis[1]) } else { (0, by_axis[0]) };
+    let thinnest = (0..3).filter(|&j| j != k).all(|j| ext[k] < 0.8 * ext[j]);
+    if !(side > 1.5 * by_axis[2] && thinnest) {
+        return None;
+    }
+    let (axis, fix) = if k == 1 { ("Y", "90,0,0 or -90,0,0") } else { ("X", "0,90,0 or 0,-90,0") };
+    Some(format!(
+        "most of its flat faces face {axis} ({side:.0} mm² against {:.0} mm² facing Z): if it was drawn {axis}-up, --part-rotate {fix} lays it flat (whichever puts the side to cut on top)",
+        by_axis[2]
+    ))
+}
+
 /// Reads an STL file.
 pub fn read(path: &Path) -> Result<Mesh> {
     let bytes = std::fs::read(path).map_err(|e| Error::input(path, "file", format!("cannot read: {e}")))?;

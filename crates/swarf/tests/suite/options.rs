@@ -161,7 +161,7 @@ fn bad_overrides_name_their_setting() {
             &drawing,
             {
                 import = o.import.clone();
-                import.svg_px_per_inch = 0.0;
+                import.svg_px_per_inch = Some(0.0);
                 Overrides { import: import.clone(), ..o.clone() }
             },
             Setting::SvgDpi,
