@@ -132,6 +132,9 @@ pub struct Report {
     pub gouge_at: Vec<crate::sim::Event>,
     /// Where the first plunges are; at most 20.
     pub plunge_at: Vec<crate::sim::Event>,
+    /// Why each of `plunge_at` is a plunge, as the program's note before it says (`no room
+    /// for a helix or a ramp`, …); empty where the program gives no reason.
+    pub plunge_why: Vec<String>,
     /// Where the first rapid collisions are; at most 20.
     pub rapid_collision_at: Vec<crate::sim::Event>,
     /// Rapids through uncut material.
@@ -189,6 +192,18 @@ pub fn fill_program(rep: &mut Report, tp: &Toolpath, rapid_rate: f64) {
     rep.moves = c;
 }
 
+/// The reason the program's notes give for a plunge at move `mi`: the last `plunge: …` note
+/// at most two moves before it (the note precedes the travel over the place, or the plunge).
+fn plunge_reason(tp: &Toolpath, mi: usize) -> String {
+    tp.notes
+        .iter()
+        .rev()
+        .filter(|n| n.at <= mi && n.at + 2 >= mi)
+        .find_map(|n| n.text.strip_prefix("plunge: "))
+        .unwrap_or("")
+        .to_string()
+}
+
 /// Fills every figure of a report: the program's ([`fill_program`]) and the simulation's.
 pub fn fill(rep: &mut Report, tp: &Toolpath, replay: &Replay, rest: &Rest, rapid_rate: f64) {
     fill_program(rep, tp, rapid_rate);
@@ -220,6 +235,7 @@ pub fn fill(rep: &mut Report, tp: &Toolpath, replay: &Replay, rest: &Rest, rapid
     rep.gouge_max_mm = replay.gouges.iter().map(|g| g.depth).fold(0.0, f64::max);
     rep.gouge_at = replay.gouges.iter().take(20).cloned().collect();
     rep.plunge_at = replay.plunges.iter().take(20).cloned().collect();
+    rep.plunge_why = rep.plunge_at.iter().map(|e| plunge_reason(tp, e.move_index)).collect();
     rep.rapid_collision_at = replay.rapid_collisions.iter().take(20).cloned().collect();
     rep.rapid_collisions = replay.rapid_collisions.len();
     rep.rest_area_mm2 = rest.area_mm2;
@@ -250,5 +266,21 @@ mod tests {
         assert!((s.p50 - 50.5).abs() < 1e-9);
         assert!((s.p99 - 99.01).abs() < 1e-9);
         assert_eq!(Stats::of(vec![0.0, 0.0]).n, 0);
+    }
+
+    #[test]
+    fn a_plunge_gets_the_reason_noted_before_it() {
+        use crate::geom::DVec3;
+        use crate::toolpath::MoveKind;
+        let mut tp = Toolpath::new(crate::model::Tool::flat(6.0), DVec3::new(0.0, 0.0, 5.0), 5.0);
+        tp.rapid(DVec3::new(10.0, 0.0, 5.0));
+        tp.note("plunge: no room for a helix or a ramp");
+        tp.rapid(DVec3::new(10.0, 0.0, 1.0));
+        tp.line(MoveKind::Plunge, DVec3::new(10.0, 0.0, -3.0), 500.0);
+        tp.line(MoveKind::Cut, DVec3::new(20.0, 0.0, -3.0), 1000.0);
+        tp.line(MoveKind::Plunge, DVec3::new(20.0, 0.0, -6.0), 500.0);
+        assert_eq!(plunge_reason(&tp, 2), "no room for a helix or a ramp");
+        // a note further back belongs to another plunge
+        assert_eq!(plunge_reason(&tp, 4), "");
     }
 }
