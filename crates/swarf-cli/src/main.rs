@@ -773,11 +773,22 @@ struct Scene {
     part: swarf::geom::Area,
     stock: swarf::geom::Area,
     fixtures: swarf::geom::Area,
+    /// A 3D job's levels with the part's shadow at each.
+    levels: Vec<swarf::plot::Level>,
 }
 
 impl Scene {
     fn of(job: &swarf::model::Job) -> Scene {
-        Scene { part: job.part.clone(), stock: job.stock.clone(), fixtures: job.fixtures.clone() }
+        Scene { part: job.part.clone(), stock: job.stock.clone(), fixtures: job.fixtures.clone(), levels: Vec::new() }
+    }
+
+    fn of_mesh(job: &swarf::model::MeshJob, levels: &[f64]) -> Scene {
+        let levels = levels
+            .iter()
+            .zip(job.shadows(levels))
+            .map(|(&z, part)| swarf::plot::Level { z, part })
+            .collect();
+        Scene { part: job.outline(), stock: job.stock_area(), fixtures: swarf::geom::Area::empty(), levels }
     }
 }
 
@@ -844,6 +855,7 @@ fn write_outputs(scene: impl FnOnce() -> Scene, res: &RoughResult, out: &Outputs
             toolpath: &res.toolpath,
             replay,
             ref_deg: res.report.engagement_ref_deg,
+            levels: &scene.levels,
         };
         let svg = swarf::plot::svg(&fig);
         if let Some(p) = &out.plot_png {
@@ -864,8 +876,18 @@ fn summary(r: &swarf::report::Report) -> String {
             r.input, r.strategy, r.cut_length_mm, r.time_min, r.plunges, r.total_s
         );
     }
+    // (3D: the terraces z-level roughing leaves by design, and what the tool could have cut)
+    let terraces = if r.rest_terrace_area_mm2 > 0.0 {
+        format!(
+            " ({:.2}% terraces, {:.2}% beyond them)",
+            (r.rest_fraction - r.rest_beyond_terraces_fraction) * 100.0,
+            r.rest_beyond_terraces_fraction * 100.0
+        )
+    } else {
+        String::new()
+    };
     format!(
-        "{} {}: {:.0} mm cut, {:.2} min ({:.0}% efficient), engagement max {:.1} p95 {:.1} deg, {} plunges, {} gouges, {} rapid collisions, rest {:.2}%, {:.2} s (planned in {:.2} s, proven in {:.2} s)",
+        "{} {}: {:.0} mm cut, {:.2} min ({:.0}% efficient), engagement max {:.1} p95 {:.1} deg, {} plunges, {} gouges, {} rapid collisions, rest {:.2}%{terraces}, {:.2} s (planned in {:.2} s, proven in {:.2} s)",
         r.input,
         r.strategy,
         r.cut_length_mm,
@@ -912,9 +934,7 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
     };
     let scene = || match &input {
         Input::Flat(job) => Scene::of(job),
-        Input::Mesh(job) => {
-            Scene { part: job.outline(), stock: job.stock_area(), fixtures: swarf::geom::Area::empty() }
-        }
+        Input::Mesh(job) => Scene::of_mesh(job, &res.report.levels),
     };
     write_outputs(
         scene,

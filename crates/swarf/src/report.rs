@@ -143,6 +143,16 @@ pub struct Report {
     pub rest_area_mm2: f64,
     /// Rest over reachable area.
     pub rest_fraction: f64,
+    /// Of the rest, the terraces z-level roughing leaves by design (3D jobs): area, mm², where
+    /// the stock stands no higher than the lowest level at or above what the tool reaches.
+    pub rest_terrace_area_mm2: f64,
+    /// Their volume, mm³.
+    pub rest_terrace_volume_mm3: f64,
+    /// The rest beyond the terraces (material the tool could have cut at a level and left), as
+    /// a fraction of the reachable area; equal to `rest_fraction` in 2.5D.
+    pub rest_beyond_terraces_fraction: f64,
+    /// Its largest thickness, mm.
+    pub rest_beyond_terraces_max_mm: f64,
     /// Reachable material left, mm³.
     pub rest_volume_mm3: f64,
     /// Thickest rest material, mm (2.5D: its height above the floor; 3D: above the lowest the
@@ -243,6 +253,13 @@ pub fn fill(rep: &mut Report, tp: &Toolpath, replay: &Replay, rest: &Rest, rapid
     rep.rest_max_thickness_mm = rest.max_thickness_mm;
     rep.reachable_area_mm2 = rest.reachable_mm2;
     rep.rest_fraction = if rest.reachable_mm2 > 0.0 { rest.area_mm2 / rest.reachable_mm2 } else { 0.0 };
+    rep.rest_terrace_area_mm2 = rest.terrace_mm2;
+    rep.rest_terrace_volume_mm3 = rest.terrace_volume_mm3;
+    let beyond = rest.area_mm2 - rest.terrace_mm2;
+    rep.rest_beyond_terraces_fraction = if rest.reachable_mm2 > 0.0 { beyond / rest.reachable_mm2 } else { 0.0 };
+    // (a 2.5D model has no terraces and leaves the figure at 0: all its rest is beyond)
+    rep.rest_beyond_terraces_max_mm =
+        if rest.terrace_mm2 > 0.0 { rest.beyond_max_thickness_mm } else { rest.max_thickness_mm };
     rep.removed_volume_mm3 = replay.removed_volume;
 }
 

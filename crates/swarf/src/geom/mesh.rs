@@ -217,7 +217,10 @@ pub fn flats(mesh: &Mesh, tol: f64) -> Vec<f64> {
         .filter_map(|t| {
             let n = (t[1] - t[0]).cross(t[2] - t[0]);
             let len = n.length();
-            (len > 0.0 && n.z / len > 0.9999 && 0.5 * len > 1e-6).then(|| (t[0].z + t[1].z + t[2].z) / 3.0)
+            // (its highest corner, not the mean: the mean of three equal heights can round a
+            // unit in the last place below them, and the part's shadow strictly above such a
+            // level then holds the whole flat, so the level cuts nothing)
+            (len > 0.0 && n.z / len > 0.9999 && 0.5 * len > 1e-6).then(|| t[0].z.max(t[1].z).max(t[2].z))
         })
         .collect();
     zs.sort_by(|a, b| b.total_cmp(a));

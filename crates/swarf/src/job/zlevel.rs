@@ -19,6 +19,9 @@ use crate::toolpath::Toolpath;
 use std::sync::Arc;
 use std::time::Instant;
 
+/// The picture's top view of a 3D job's stock is at most this many blocks of cells to a side.
+const TOP_VIEW_SIDE: usize = 800;
+
 /// Plans the z-level program of `job` (no posting, no simulation).
 pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -> Result<(Toolpath, Vec<f64>)> {
     job.validate()?;
@@ -150,6 +153,8 @@ pub fn rough(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(Stage,
         let mut sim = crate::sim::heights::mesh_model(job, &opts.sim)?;
         let mut rp = sim.replay(tp, &mut |f| progress(Stage::Simulate, f));
         rp.res = sim.grid.res;
-        Ok((rp, crate::sim::heights::mesh_rest(job, &sim)))
+        let (rest, view) = crate::sim::heights::mesh_rest(job, &sim, TOP_VIEW_SIDE);
+        rp.top_view = Some(view);
+        Ok((rp, rest))
     })
 }

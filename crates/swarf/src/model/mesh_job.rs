@@ -109,6 +109,21 @@ impl MeshJob {
         crate::geom::mesh::Shadows::new(&self.mesh).down_to(self.floor - self.allowance_floor).clone()
     }
 
+    /// The part's shadow from above each of `zs` (descending tool-tip heights, as
+    /// [`MeshJob::levels`] gives them): the region each level must not enter, less the
+    /// allowance.
+    pub fn shadows(&self, zs: &[f64]) -> Vec<Area> {
+        let mut sh = crate::geom::mesh::Shadows::new(&self.mesh);
+        let mut last = f64::INFINITY;
+        zs.iter()
+            .map(|&z| {
+                // (built downwards: a level out of order gets the lowest shadow so far)
+                last = last.min(z - self.allowance_floor);
+                sh.down_to(last).clone()
+            })
+            .collect()
+    }
+
     /// Highest point of the part with its allowance, or the stock top when the part is lower.
     pub fn top(&self) -> f64 {
         self.mesh.bounds().map_or(self.stock_hi.z, |(_, hi)| (hi.z + self.allowance_floor).max(self.stock_hi.z))

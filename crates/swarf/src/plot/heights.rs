@@ -4,6 +4,7 @@
 //! grid) and written as PNG.
 
 use crate::error::{Error, Result};
+use crate::sim::TopView;
 
 /// Heights on a grid of `nx × ny` cells, row-major from the bottom row (the simulator's order).
 #[derive(Debug, Clone, Copy)]
@@ -71,6 +72,48 @@ pub fn png(p: &RestPicture) -> Result<Vec<u8>> {
         .map_err(|e| Error::Output { what: "picture".into(), reason: format!("cannot encode the PNG: {e}") })
 }
 
+/// A 3D job's stock after its program from above ([`TopView`]) as PNG bytes, a pixel a block:
+/// grey by height (dark is deep), amber where a terrace stands (stronger the thicker, full at
+/// 3 mm), red where material the tool could have cut stands (full from 0.5 mm), white where
+/// there is no stock.
+pub fn top_view_png(v: &TopView) -> Result<Vec<u8>> {
+    let empty = || Error::Output { what: "picture".into(), reason: "it is empty".into() };
+    let n = v.nx * v.ny;
+    if n == 0 || v.height.len() != n || v.terrace.len() != n || v.beyond.len() != n {
+        return Err(empty());
+    }
+    let mut pix = resvg::tiny_skia::Pixmap::new(v.nx as u32, v.ny as u32).ok_or_else(empty)?;
+    let span = (v.top - v.bottom).max(1e-9);
+    let data = pix.data_mut();
+    for j in 0..v.ny {
+        for i in 0..v.nx {
+            let b = j * v.nx + i;
+            let hgt = f64::from(v.height[b]);
+            let (r, g, bl) = if hgt.is_finite() {
+                let g = 60.0 + 180.0 * ((hgt - v.bottom) / span).clamp(0.0, 1.0);
+                let blend = |c: (f64, f64, f64), a: f64| (g + (c.0 - g) * a, g + (c.1 - g) * a, g + (c.2 - g) * a);
+                if v.beyond[b] > 0.0 {
+                    blend((220.0, 20.0, 20.0), (0.5 + f64::from(v.beyond[b])).min(1.0))
+                } else if v.terrace[b] > 0.0 {
+                    blend((245.0, 175.0, 40.0), 0.25 + 0.5 * (f64::from(v.terrace[b]) / 3.0).min(1.0))
+                } else {
+                    (g, g, g)
+                }
+            } else {
+                (255.0, 255.0, 255.0)
+            };
+            // image rows top down: y up in the grid
+            let o = ((v.ny - 1 - j) * v.nx + i) * 4;
+            data[o] = r.round() as u8;
+            data[o + 1] = g.round() as u8;
+            data[o + 2] = bl.round() as u8;
+            data[o + 3] = 255;
+        }
+    }
+    pix.encode_png()
+        .map_err(|e| Error::Output { what: "picture".into(), reason: format!("cannot encode the PNG: {e}") })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -101,5 +144,33 @@ mod tests {
         assert_eq!(g.red(), g.green());
         assert_eq!(g.green(), g.blue());
         assert!(png(&RestPicture { nx: 0, ..p }).is_err());
+    }
+
+    #[test]
+    fn the_top_view_shows_terraces_amber_and_the_rest_beyond_red() {
+        let v = TopView {
+            nx: 4,
+            ny: 1,
+            x0: 0.0,
+            y0: 0.0,
+            side: 1.0,
+            height: vec![0.0, -5.0, -5.0, f32::NAN],
+            terrace: vec![0.0, 3.0, 0.0, 0.0],
+            beyond: vec![0.0, 0.0, 2.0, 0.0],
+            top: 0.0,
+            bottom: -10.0,
+        };
+        let pix = resvg::tiny_skia::Pixmap::decode_png(&top_view_png(&v).expect("a picture")).expect("a PNG");
+        assert_eq!((pix.width(), pix.height()), (4, 1));
+        let at = |x: u32| {
+            let p = pix.pixel(x, 0).expect("inside");
+            (p.red(), p.green(), p.blue())
+        };
+        let (top, terrace, beyond, none) = (at(0), at(1), at(2), at(3));
+        assert!(top.0 == top.1 && top.1 == top.2 && top.0 == 240, "the stock top light grey: {top:?}");
+        assert!(terrace.0 > terrace.1 && terrace.1 > terrace.2, "amber: {terrace:?}");
+        assert_eq!(beyond, (220, 20, 20), "red");
+        assert_eq!(none, (255, 255, 255), "no stock");
+        assert!(top_view_png(&TopView { nx: 0, ..v }).is_err());
     }
 }

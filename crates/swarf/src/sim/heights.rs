@@ -5,7 +5,7 @@
 
 use super::grid::Grid;
 use super::raster::RasterSim;
-use super::replay::Rest;
+use super::replay::{Rest, TopView};
 use super::{HeightMap, SimOptions};
 use crate::error::Result;
 use crate::geom::mesh::Mesh;
@@ -109,9 +109,23 @@ pub(crate) fn mesh_model_after(
 /// Material the tool could have removed and left: at each cell, the stock above the lowest
 /// height a flat end mill of the job's radius reaches there without touching the part (the grey
 /// closing of the part's heights by the tool's disk), counted where it is thicker than the
-/// simulation's tolerance.
-pub(crate) fn mesh_rest(job: &MeshJob, sim: &RasterSim) -> Rest {
-    rest_above(job, sim, &reach(job, &sim.grid, sim.part_heights(), job.radius()))
+/// simulation's tolerance; and the stock seen from above, in blocks of cells at most
+/// `view_side` to a side, for the picture.
+///
+/// The rest is split into terraces and what lies beyond them (see [`rest_above`]) by the reach
+/// over the part raised at each cell to its highest within a cell and a half (every
+/// neighbouring cell): a path keeps a few hundredths of a millimetre from the part (offsets,
+/// simplification, arcs), and on a wall with a slight draft the cell centres within that
+/// clearance stand a whole level high; such a sliver, narrower than a cell, is not material the
+/// tool could have cut. (The same idea as the rest band of an independent checker that raises
+/// the part by its highest within 0.02 mm.)
+pub(crate) fn mesh_rest(job: &MeshJob, sim: &RasterSim, view_side: usize) -> (Rest, TopView) {
+    let g = sim.grid;
+    let low = reach(job, &g, sim.part_heights(), job.radius());
+    let banded = disk_filter(sim.part_heights(), g.nx, g.ny, REST_BAND_CELLS, true);
+    let far = reach(job, &g, &banded, job.radius());
+    let levels = job.levels();
+    (rest_above(job, sim, &low, &far, &levels), top_view(job, sim, &low, &far, &levels, view_side))
 }
 
 /// The lowest height a flat end mill of radius `radius` reaches at each cell of `grid` without
@@ -146,14 +160,18 @@ fn reach(job: &MeshJob, grid: &Grid, part: &[f32], radius: f64) -> Vec<f32> {
 
 /// The rest material of `sim`'s stock above `low` (the heights of [`mesh_reach`] on `sim`'s
 /// grid): the stock standing more than the simulation's tolerance above it inside the stock box,
-/// where `low` is below the stock top (the area the tool reaches).
-pub(crate) fn rest_above(job: &MeshJob, sim: &RasterSim, low: &[f32]) -> Rest {
+/// where `low` is below the stock top (the area the tool reaches). Split by the program's
+/// `levels` (tool-tip heights): where the stock stands no higher than the lowest level (or the
+/// stock top) at or above `low`, the rest is a terrace z-level roughing leaves by design (on a slope, between a
+/// level and the surface below it); above that, the tool could have cut it at a level and did
+/// not. `far` is the reach the split is judged by (see [`mesh_rest`]; `low` itself, or higher).
+pub(crate) fn rest_above(job: &MeshJob, sim: &RasterSim, low: &[f32], far: &[f32], levels: &[f64]) -> Rest {
+    let terraces = Terraces::new(job, levels);
     let g = sim.grid;
     let s = sim.heights();
     let (slo, shi) = (job.stock_lo, job.stock_hi);
     let cell = g.res * g.res;
     let mut r = Rest::default();
-    let tol = 0.01f32;
     for j in 0..g.ny {
         for i in 0..g.nx {
             let c = g.center(i, j);
@@ -161,22 +179,121 @@ pub(crate) fn rest_above(job: &MeshJob, sim: &RasterSim, low: &[f32]) -> Rest {
                 continue;
             }
             let k = j * g.nx + i;
-            if low[k] >= shi.z as f32 - tol {
+            if low[k] >= shi.z as f32 - REST_TOL {
                 continue;
             }
             r.reachable_mm2 += cell;
             let t = s[k] - low[k];
-            if t > tol {
+            if t > REST_TOL {
                 if t > 0.5 {
                     log::trace!("rest {t:.3} mm at {c:?} (stock {:.3}, reach {:.3})", s[k], low[k]);
                 }
                 r.area_mm2 += cell;
                 r.volume_mm3 += t as f64 * cell;
                 r.max_thickness_mm = r.max_thickness_mm.max(t as f64);
+                if terraces.holds(s[k], far[k]) {
+                    r.terrace_mm2 += cell;
+                    r.terrace_volume_mm3 += t as f64 * cell;
+                } else {
+                    r.beyond_max_thickness_mm = r.beyond_max_thickness_mm.max(t as f64);
+                }
             }
         }
     }
     r
+}
+
+/// Rest thinner than this is none, mm.
+const REST_TOL: f32 = 0.01;
+
+/// The band round the part within which rest is judged no miss, in cells (see [`mesh_rest`]).
+const REST_BAND_CELLS: f64 = 1.5;
+
+/// The terraces z-level roughing leaves by design: over a cell the tool reaches down to `low`,
+/// the lowest it can stand is the lowest level at or above `low` (or the stock top, above which
+/// nothing is cut), and stock no higher than that is a terrace; above it, the tool could have
+/// cut it at a level and did not.
+struct Terraces {
+    /// The levels and the stock top, ascending.
+    zs: Vec<f32>,
+}
+
+impl Terraces {
+    fn new(job: &MeshJob, levels: &[f64]) -> Terraces {
+        let mut zs: Vec<f32> =
+            levels.iter().chain([&job.stock_hi.z]).map(|&z| z as f32).filter(|z| z.is_finite()).collect();
+        zs.sort_by(f32::total_cmp);
+        Terraces { zs }
+    }
+
+    /// Whether stock standing at `s` over a cell the tool reaches down to `low` is a terrace.
+    fn holds(&self, s: f32, low: f32) -> bool {
+        let at = self.zs.partition_point(|&z| z < low - REST_TOL);
+        self.zs.get(at).is_some_and(|&z| s <= z + REST_TOL)
+    }
+}
+
+/// The stock of `sim` seen from above in square blocks of cells, at most `side` blocks to a
+/// side: each block's mean stock top and its thickest rest above `low`, terraces and the rest
+/// beyond them apart (as [`rest_above`]).
+pub(crate) fn top_view(
+    job: &MeshJob,
+    sim: &RasterSim,
+    low: &[f32],
+    far: &[f32],
+    levels: &[f64],
+    side: usize,
+) -> TopView {
+    let terraces = Terraces::new(job, levels);
+    let g = sim.grid;
+    let s = sim.heights();
+    let (slo, shi) = (job.stock_lo, job.stock_hi);
+    // the stock box's cells only
+    let (i0, j0) = (((slo.x - g.x0) / g.res).floor().max(0.0) as usize, ((slo.y - g.y0) / g.res).floor().max(0.0) as usize);
+    let (i1, j1) =
+        ((((shi.x - g.x0) / g.res).ceil() as usize).min(g.nx), (((shi.y - g.y0) / g.res).ceil() as usize).min(g.ny));
+    let (w, h) = (i1.saturating_sub(i0), j1.saturating_sub(j0));
+    let k = w.max(h).div_ceil(side.max(1)).max(1);
+    let (nx, ny) = (w.div_ceil(k), h.div_ceil(k));
+    let mut v = TopView {
+        nx,
+        ny,
+        x0: g.x0 + i0 as f64 * g.res,
+        y0: g.y0 + j0 as f64 * g.res,
+        side: k as f64 * g.res,
+        height: vec![f32::NAN; nx * ny],
+        terrace: vec![0.0; nx * ny],
+        beyond: vec![0.0; nx * ny],
+        top: shi.z,
+        bottom: job.floor + job.allowance_floor,
+    };
+    for bj in 0..ny {
+        for bi in 0..nx {
+            let (mut sum, mut n) = (0.0f64, 0usize);
+            let b = bj * nx + bi;
+            for j in j0 + bj * k..(j0 + (bj + 1) * k).min(j1) {
+                for i in i0 + bi * k..(i0 + (bi + 1) * k).min(i1) {
+                    let c = j * g.nx + i;
+                    if s[c].is_finite() {
+                        sum += f64::from(s[c]);
+                        n += 1;
+                    }
+                    if low[c] >= shi.z as f32 - REST_TOL {
+                        continue;
+                    }
+                    let t = s[c] - low[c];
+                    if t > REST_TOL {
+                        let into = if terraces.holds(s[c], far[c]) { &mut v.terrace[b] } else { &mut v.beyond[b] };
+                        *into = into.max(t);
+                    }
+                }
+            }
+            if n > 0 {
+                v.height[b] = (sum / n as f64) as f32;
+            }
+        }
+    }
+    v
 }
 
 /// Maximum (`max`) or minimum over the disk of radius `rc` cells around every cell. Outside the
@@ -322,6 +439,26 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn terraces_stand_no_higher_than_the_lowest_level_the_tool_could_take() {
+        let job = MeshJob::new(
+            "t",
+            pocket_block(10.0, 4.0),
+            crate::geom::DVec3::new(0.0, 0.0, -10.0),
+            crate::geom::DVec3::new(10.0, 10.0, 0.0),
+            crate::model::Cutting::default(),
+        );
+        let t = Terraces::new(&job, &[-3.0, -6.0]);
+        // the tool reaches -4 here: it could stand at -3, not lower
+        assert!(t.holds(-3.0, -4.0) && t.holds(-3.5, -4.0));
+        assert!(!t.holds(-2.0, -4.0), "a level's worth above: missed");
+        // reaching exactly a level (within the tolerance), the tool stands at it
+        assert!(t.holds(-6.0, -6.005) && !t.holds(-3.0, -6.005));
+        // below every level: the lowest level; above them all: the stock top, uncut
+        assert!(t.holds(-6.0, -9.0) && !t.holds(-5.0, -9.0));
+        assert!(t.holds(0.0, -1.0));
     }
 
     #[test]

@@ -28,7 +28,7 @@ pub mod sweep;
 
 #[doc(hidden)]
 pub use raster::RasterSim;
-pub use replay::{Event, Replay, Rest, Sample, SampleKind};
+pub use replay::{Event, Replay, Rest, Sample, SampleKind, TopView};
 #[doc(hidden)]
 pub use sdf::SdfSim;
 

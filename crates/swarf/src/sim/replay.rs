@@ -71,6 +71,37 @@ pub struct Replay {
     pub rest_cells: Vec<DVec2>,
     /// Cell size of the simulation, mm.
     pub res: f64,
+    /// A 3D job's stock after the program seen from above, for its picture (filled by the
+    /// pipeline).
+    pub top_view: Option<TopView>,
+}
+
+/// The stock after a 3D job's program seen from above, in square blocks of the simulation's
+/// cells (row-major from the bottom row): each block's mean height and its thickest rest, the
+/// terraces z-level roughing leaves by design apart from the rest beyond them (see
+/// [`Rest::terrace_mm2`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TopView {
+    /// Columns.
+    pub nx: usize,
+    /// Rows.
+    pub ny: usize,
+    /// x of the left edge of column 0, mm.
+    pub x0: f64,
+    /// y of the bottom edge of row 0, mm.
+    pub y0: f64,
+    /// A block's side, mm.
+    pub side: f64,
+    /// Mean stock top per block, mm (NaN: no stock).
+    pub height: Vec<f32>,
+    /// Thickest terrace per block, mm (0: none).
+    pub terrace: Vec<f32>,
+    /// Thickest rest beyond the terraces per block, mm (0: none).
+    pub beyond: Vec<f32>,
+    /// The stock top, mm.
+    pub top: f64,
+    /// The floor, mm.
+    pub bottom: f64,
 }
 
 /// Rest material: reachable material left standing.
@@ -84,6 +115,13 @@ pub struct Rest {
     pub max_thickness_mm: f64,
     /// Area the tool can reach, mm².
     pub reachable_mm2: f64,
+    /// Of `area_mm2`, the terraces z-level roughing leaves by design: where the stock stands
+    /// no higher than the lowest level at or above the reachable height (3D jobs; 0 in 2.5D).
+    pub terrace_mm2: f64,
+    /// Their volume, mm³.
+    pub terrace_volume_mm3: f64,
+    /// The largest thickness of the rest beyond the terraces, mm.
+    pub beyond_max_thickness_mm: f64,
 }
 
 /// What a material model answers during a replay.

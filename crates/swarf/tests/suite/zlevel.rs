@@ -136,3 +136,59 @@ fn an_stl_alone_is_not_faced_unless_asked() {
     let _ = std::fs::remove_dir_all(&dir);
     assert!(matches!(e, swarf::Error::Input { .. }) && e.to_string().contains("flat.stl"), "{e}");
 }
+
+/// A wedge: a slope from z 2 at x 0 up to z 14 at x 40, then flat to x 60, 30 mm deep in y.
+fn wedge_facets() -> Vec<[[f64; 3]; 3]> {
+    let mut f = Vec::new();
+    let mut quad = |a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]| {
+        f.push([a, b, c]);
+        f.push([a, c, d]);
+    };
+    quad([0.0, 0.0, 2.0], [40.0, 0.0, 14.0], [40.0, 30.0, 14.0], [0.0, 30.0, 2.0]);
+    quad([40.0, 0.0, 14.0], [60.0, 0.0, 14.0], [60.0, 30.0, 14.0], [40.0, 30.0, 14.0]);
+    quad([0.0, 0.0, 0.0], [0.0, 30.0, 0.0], [60.0, 30.0, 0.0], [60.0, 0.0, 0.0]);
+    quad([0.0, 0.0, 0.0], [0.0, 0.0, 2.0], [0.0, 30.0, 2.0], [0.0, 30.0, 0.0]);
+    quad([60.0, 0.0, 0.0], [60.0, 30.0, 0.0], [60.0, 30.0, 14.0], [60.0, 0.0, 14.0]);
+    // the two sides (x, z pentagons), fanned from the bottom corner
+    for (y, flip) in [(0.0, false), (30.0, true)] {
+        let p = [[0.0, y, 0.0], [60.0, y, 0.0], [60.0, y, 14.0], [40.0, y, 14.0], [0.0, y, 2.0]];
+        for k in 1..4 {
+            f.push(if flip { [p[0], p[k + 1], p[k]] } else { [p[0], p[k], p[k + 1]] });
+        }
+    }
+    f
+}
+
+/// On a slope, z-level roughing leaves terraces by design: the report tells them apart from
+/// material the tool could have cut at a level and left. Here every level is cut, so the rest is
+/// the terraces, each at most a step-down thick (their volume is half the step-down times the
+/// slope's plan area: a triangle under every step), and nothing beyond them.
+#[test]
+fn the_rest_on_a_slope_is_terraces() {
+    let dir = tmpdir("wedge");
+    std::fs::write(dir.join("wedge.stl"), crate::common::ascii_stl("wedge", &wedge_facets())).unwrap();
+    let case = r#"{"units": "mm", "tool": {"diameter": 6, "type": "flat"},
+        "stock_box": [-10, -10, 0, 70, 40, 14], "part_stl": "wedge.stl",
+        "stepdown": 3.0, "engagement_deg": 60, "feed_default": 1000, "rapid_rate": 5000}"#;
+    std::fs::write(dir.join("wedge.json"), case).unwrap();
+    let Input::Mesh(job) = swarf::io::load_input(&dir.join("wedge.json"), &Default::default()).unwrap() else {
+        panic!("a 3D case reads as a mesh job")
+    };
+    let opts = RoughOptions { sim: swarf::sim::SimOptions { res: Some(0.1), ..Default::default() }, ..Default::default() };
+    let r = swarf::job::zlevel::rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{e}")).report;
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!((r.gouges, r.rapid_collisions), (0, 0));
+    // the slope's plan area is 40 × 30 mm: nearly all of it carries a terrace
+    assert!(r.rest_terrace_area_mm2 > 0.9 * 1200.0, "terraces over {} mm²", r.rest_terrace_area_mm2);
+    // (five even levels 2.8 mm apart from the top at 14 down to the floor)
+    assert_eq!(r.levels.len(), 5, "{:?}", r.levels);
+    let want = 0.5 * 2.8 * 1200.0;
+    assert!(
+        (r.rest_terrace_volume_mm3 - want).abs() < 0.1 * want,
+        "terraces of {} mm³, want about {want}",
+        r.rest_terrace_volume_mm3
+    );
+    assert!(r.rest_max_thickness_mm <= 2.8 + 0.05, "rest {} mm thick", r.rest_max_thickness_mm);
+    assert!(r.rest_beyond_terraces_fraction < 0.002, "{} beyond the terraces", r.rest_beyond_terraces_fraction);
+    assert!(r.rest_fraction > 0.1, "the terraces count as rest ({})", r.rest_fraction);
+}

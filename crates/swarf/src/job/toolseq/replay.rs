@@ -144,7 +144,8 @@ pub(super) fn replay(job: &MeshJob, programs: &mut [Program], sim: &SimOptions, 
             let low = heights::mesh_reach(job, &model.grid, last_r);
             (model.grid, low)
         });
-        let rest = heights::rest_above(job, &model, &resample(&low.0, &low.1, &model.grid, f32::INFINITY));
+        let low = resample(&low.0, &low.1, &model.grid, f32::INFINITY);
+        let rest = heights::rest_above(job, &model, &low, &low, &job.levels());
         let mut rep = Report::default();
         crate::report::fill(&mut rep, &p.toolpath, &rp, &rest, rapid_rate);
         let worst = |v: &[Event]| v.iter().map(|e| e.depth).fold(0.0, f64::max);
