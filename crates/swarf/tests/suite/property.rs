@@ -3,7 +3,8 @@
 //! no gouge, no rapid collision, less than 0.5 % of the reachable area left, and no plunge
 //! where the tool has room for a helix; and random parts on a plate (a frame and bosses, as
 //! an STL) roughed in z-levels region by region and level by level, which must cut the same
-//! moves on the same material.
+//! moves on the same material; and random blocks with round holes and pockets, which must be
+//! entered by a helix or a ramp wherever one of 5 % of the tool fits.
 //!
 //! The generator is deterministic: every case is made from one seed (a xorshift64* stream seeded
 //! through splitmix64), so a failure reproduces from its seed alone. A failing case is reported
@@ -947,4 +948,163 @@ fn random_meshes_cut_region_by_region_as_level_by_level() {
     assert!(bad.is_empty(), "{}", bad.join("\n"));
     // (not a test of nothing: the frame's pocket is cut to its bottom on its own)
     assert!(reordered > 0, "no program was reordered");
+}
+
+// ---------------------------------------------------------------------------------------------
+// random blocks with holes and pockets: entries without plunges
+
+/// The facets of a prism over the convex polygon `ring` (counter-clockwise) from `z0` to `z1`.
+fn prism_facets(ring: &[[f64; 2]], z0: f64, z1: f64) -> Vec<[[f64; 3]; 3]> {
+    let mut f = Vec::new();
+    let n = ring.len();
+    for k in 1..n - 1 {
+        let (a, b, c) = (ring[0], ring[k], ring[k + 1]);
+        f.push([[a[0], a[1], z1], [b[0], b[1], z1], [c[0], c[1], z1]]);
+        f.push([[a[0], a[1], z0], [c[0], c[1], z0], [b[0], b[1], z0]]);
+    }
+    for k in 0..n {
+        let (a, b) = (ring[k], ring[(k + 1) % n]);
+        f.push([[a[0], a[1], z0], [b[0], b[1], z0], [b[0], b[1], z1]]);
+        f.push([[a[0], a[1], z0], [b[0], b[1], z1], [a[0], a[1], z1]]);
+    }
+    f
+}
+
+/// A square tile `[x0, x0 + s]²`-wide column from `z0` to `z1` with a round hole of radius `r` at
+/// its centre: a prism per sector between the hole's polygon and the tile's edge, the sectors'
+/// rays through the polygon's vertices and the tile's corners.
+fn holed_tile(x0: f64, y0: f64, s: f64, r: f64, z0: f64, z1: f64) -> Vec<[[f64; 3]; 3]> {
+    let c = [x0 + s / 2.0, y0 + s / 2.0];
+    let mut angles: Vec<f64> = (0..48).map(|k| k as f64 * std::f64::consts::TAU / 48.0).collect();
+    angles.extend([1.0, 3.0, 5.0, 7.0].map(|k| k * std::f64::consts::FRAC_PI_4));
+    angles.sort_by(f64::total_cmp);
+    angles.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    let on_edge = |t: f64| {
+        let (dx, dy) = (t.cos(), t.sin());
+        let k = (s / 2.0) / dx.abs().max(dy.abs());
+        [c[0] + k * dx, c[1] + k * dy]
+    };
+    let on_hole = |t: f64| [c[0] + r * t.cos(), c[1] + r * t.sin()];
+    let mut f = Vec::new();
+    for k in 0..angles.len() {
+        let (a, b) = (angles[k], angles[(k + 1) % angles.len()]);
+        f.extend(prism_facets(&[on_hole(a), on_edge(a), on_edge(b), on_hole(b)], z0, z1));
+    }
+    f
+}
+
+/// What a random block holds, for the checks.
+struct Block {
+    /// Centres of the round holes wide enough for a helix of 5 % of the tool, and the pockets'.
+    roomy: Vec<DVec2>,
+    /// Centres of the holes the tool fits but no helix of 5 % of it does.
+    narrow: Vec<DVec2>,
+}
+
+/// A random block of tiles, each plain, holding a round hole (blind or through) or holding a
+/// rectangular pocket, written as an ASCII STL with its case (the stock box is the block).
+fn block_case(seed: u64, dir: &std::path::Path) -> (std::path::PathBuf, String, Block) {
+    let mut rng = Rng::new(seed ^ 0x0B10_C4ED);
+    let d = [4.0, 5.0, 6.0][rng.int(0, 2)];
+    let (nx, ny) = (rng.int(2, 3), rng.int(1, 2));
+    let s = rng.range(2.6, 3.4) * d;
+    let top = rng.range(8.0, 12.0);
+    let stepdown = rng.range(1.5, 3.0);
+    let mut facets = Vec::new();
+    let mut block = Block { roomy: Vec::new(), narrow: Vec::new() };
+    let mut what = format!("Ø{d}, {nx} × {ny} tiles of {s:.1} mm, top {top:.1}, step-down {stepdown:.2}");
+    for j in 0..ny {
+        for i in 0..nx {
+            let (x0, y0) = (i as f64 * s, j as f64 * s);
+            let c = DVec2::new(x0 + s / 2.0, y0 + s / 2.0);
+            let floor = if rng.chance(0.3) { 0.0 } else { rng.range(0.2, 0.7) * top };
+            match rng.int(0, 3) {
+                0 => facets.extend(box_facets([x0, y0, 0.0], [x0 + s, y0 + s, top])),
+                1 | 2 => {
+                    // a round hole: wide enough for a helix of 5 % of the tool, or only for it
+                    let narrow = rng.chance(0.25);
+                    let hd = if narrow { rng.range(1.02, 1.07) * d } else { rng.range(1.2, 2.2) * d };
+                    if floor > 0.0 {
+                        facets.extend(box_facets([x0, y0, 0.0], [x0 + s, y0 + s, floor]));
+                    }
+                    facets.extend(holed_tile(x0, y0, s, hd / 2.0, floor, top));
+                    if narrow { &mut block.narrow } else { &mut block.roomy }.push(c);
+                    let _ = write!(what, "; hole Ø{hd:.2} at ({:.1}, {:.1}) to {floor:.1}", c.x, c.y);
+                }
+                _ => {
+                    // a rectangular pocket, at least 1.3 tools wide
+                    let (w, h) = (rng.range(1.3 * d, s - 2.0), rng.range(1.3 * d, s - 2.0));
+                    let (px0, py0) = (x0 + (s - w) / 2.0, y0 + (s - h) / 2.0);
+                    let (px1, py1) = (px0 + w, py0 + h);
+                    let fz = floor.max(0.2 * top);
+                    facets.extend(box_facets([x0, y0, 0.0], [x0 + s, y0 + s, fz]));
+                    facets.extend(box_facets([x0, y0, fz], [px0, y0 + s, top]));
+                    facets.extend(box_facets([px1, y0, fz], [x0 + s, y0 + s, top]));
+                    facets.extend(box_facets([px0, y0, fz], [px1, py0, top]));
+                    facets.extend(box_facets([px0, py1, fz], [px1, y0 + s, top]));
+                    block.roomy.push(c);
+                    let _ = write!(what, "; pocket {w:.1} × {h:.1} at ({:.1}, {:.1}) to {fz:.1}", c.x, c.y);
+                }
+            }
+        }
+    }
+    std::fs::write(dir.join(format!("block{seed}.stl")), crate::common::ascii_stl("block", &facets))
+        .expect("write the STL");
+    let (w, h) = (nx as f64 * s, ny as f64 * s);
+    let case = format!(
+        r#"{{"units": "mm", "tool": {{"diameter": {d}, "type": "flat"}}, "stock_box": [0, 0, 0, {w}, {h}, {top}],
+            "part_stl": "block{seed}.stl", "stepdown": {stepdown}, "engagement_deg": 60, "feed_default": 1000, "rapid_rate": 5000}}"#
+    );
+    let path = dir.join(format!("block{seed}.json"));
+    std::fs::write(&path, case).expect("write the case");
+    (path, what, block)
+}
+
+/// On random blocks with round holes and pockets, z-level roughing enters every level of
+/// every hole wide enough for a helix of 5 % of the tool (1.1 × its diameter) and every pocket
+/// by a helix or a ramp: the only plunges are into holes narrower than that, each with its
+/// reason; and the program is clean, with no rest but terraces.
+#[test]
+fn random_blocks_are_entered_without_plunges_where_a_helix_fits() {
+    let dir = std::env::temp_dir().join(format!("swarf-random-blocks-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let mut bad = Vec::new();
+    let (mut holes, mut narrow_plunged) = (0, 0);
+    for seed in 0..6u64 {
+        let (case, what, block) = block_case(seed, &dir);
+        let swarf::io::Input::Mesh(job) = swarf::io::load_input(&case, &Default::default()).expect("the case") else {
+            panic!("a 3D case reads as a mesh job")
+        };
+        let opts = RoughOptions { sim: SimOptions { res: Some(0.1), ..Default::default() }, ..Default::default() };
+        let res = swarf::job::zlevel::rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        let r = &res.report;
+        let rp = res.replay.as_ref().expect("simulated");
+        holes += block.roomy.len() + block.narrow.len();
+        let mut problems = Vec::new();
+        if r.gouges + r.rapid_collisions > 0 {
+            problems.push(format!("{} gouges, {} rapid collisions", r.gouges, r.rapid_collisions));
+        }
+        let near = |cs: &[DVec2], p: [f64; 3]| cs.iter().any(|c| (DVec2::new(p[0], p[1]) - *c).length() < 0.5);
+        for pl in &rp.plunges {
+            if near(&block.narrow, pl.at) {
+                narrow_plunged += 1;
+            } else {
+                problems.push(format!("a plunge at {:?} (move {}), not in a narrow hole", pl.at, pl.move_index));
+            }
+        }
+        // (the report names the first twenty, each with the program's reason)
+        if r.plunge_why.len() != r.plunges.min(20) || r.plunge_why.iter().any(|w| !w.contains("no room for a helix")) {
+            problems.push(format!("{} plunges, reasons {:?}", r.plunges, r.plunge_why));
+        }
+        if r.rest_beyond_terraces_fraction > 0.005 {
+            problems.push(format!("{:.2}% rest beyond the terraces", 100.0 * r.rest_beyond_terraces_fraction));
+        }
+        if !problems.is_empty() {
+            bad.push(format!("seed {seed} ({what}): {}", problems.join("; ")));
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+    // (not a test of nothing: holes were cut, and the narrow ones plunged into)
+    assert!(holes >= 6 && narrow_plunged > 0, "{holes} holes, {narrow_plunged} plunges into narrow ones");
 }
