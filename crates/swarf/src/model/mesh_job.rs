@@ -129,23 +129,18 @@ impl MeshJob {
         self.mesh.bounds().map_or(self.stock_hi.z, |(_, hi)| (hi.z + self.allowance_floor).max(self.stock_hi.z))
     }
 
-    /// The levels, top down: step-downs of at most `stepdown` from the stock top to the floor
-    /// (raised by the floor allowance), and the flats of the part (raised by as much) between
-    /// them.
+    /// The levels, top down: every flat of the part (raised by the floor allowance) between the
+    /// stock top and the floor (raised by as much) is a level, and between two of them (or the
+    /// stock top, or the floor) the levels are spaced evenly, at most `stepdown` apart. A flat
+    /// just under an even step so never makes a level that cuts a sliver over the whole area.
     pub fn levels(&self) -> Vec<f64> {
         self.levels_every(self.stepdown)
     }
 
-    /// The depth of cut of the even levels, mm (the stock top to the floor over their number;
-    /// the part's flats add levels between them).
+    /// The mean depth of cut of the levels, mm: the stock top to the floor over their number.
     pub fn level_depth(&self) -> f64 {
         let (top, bottom) = (self.stock_hi.z, self.floor + self.allowance_floor);
-        (top - bottom) / Self::even_levels(top, bottom, self.stepdown) as f64
-    }
-
-    /// How many even levels of at most `stepdown` from `top` down to `bottom`.
-    fn even_levels(top: f64, bottom: f64, stepdown: f64) -> usize {
-        (((top - bottom) / stepdown) - 1e-9).ceil().max(1.0) as usize
+        (top - bottom) / self.levels().len().max(1) as f64
     }
 
     /// The levels as [`MeshJob::levels`] with step-downs of at most `stepdown`.
@@ -153,7 +148,38 @@ impl MeshJob {
         let top = self.stock_hi.z;
         // (the floor is protected like the part: with its allowance on top)
         let bottom = self.floor + self.allowance_floor;
-        let n = Self::even_levels(top, bottom, stepdown);
+        // the breaks: the stock top, the flats, the floor
+        let mut breaks = vec![top, bottom];
+        for f in crate::geom::mesh::flats(&self.mesh, 1e-6) {
+            let z = f + self.allowance_floor;
+            if z < top - LEVEL_MERGE && z > bottom + LEVEL_MERGE {
+                breaks.push(z);
+            }
+        }
+        breaks.sort_by(|a, b| b.total_cmp(a));
+        breaks.dedup_by(|a, b| (*b - *a).abs() <= LEVEL_MERGE);
+        let mut zs = Vec::new();
+        for w in breaks.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let n = (((a - b) / stepdown) - 1e-9).ceil().max(1.0) as usize;
+            zs.extend((1..=n).map(|i| if i == n { b } else { a - (a - b) * i as f64 / n as f64 }));
+        }
+        if zs.is_empty() {
+            zs.push(bottom);
+        }
+        zs
+    }
+
+    /// The levels of one tool of a sequence whose depth of cut is `depth`: an even grid of
+    /// step-downs of at most `depth` from the stock top to the floor, and the flats between
+    /// them. In a sequence the grids of tools whose depths divide the stock's height alike
+    /// coincide, so a later tool's level never falls a sliver under an earlier tool's and
+    /// re-cuts all the earlier tool cleared there (the flats do make such slivers, as
+    /// [`MeshJob::levels`] avoids for one tool).
+    pub fn levels_on_grid(&self, depth: f64) -> Vec<f64> {
+        let top = self.stock_hi.z;
+        let bottom = self.floor + self.allowance_floor;
+        let n = (((top - bottom) / depth) - 1e-9).ceil().max(1.0) as usize;
         let mut zs: Vec<f64> =
             (1..=n).map(|i| if i == n { bottom } else { top - (top - bottom) * i as f64 / n as f64 }).collect();
         for f in crate::geom::mesh::flats(&self.mesh, 1e-6) {
@@ -202,4 +228,60 @@ pub(crate) fn keep_of(shadow: &Area, allowance: f64) -> Area {
         .simplified(SHADOW_SIMPLIFY)
         .offset(allowance + SHADOW_GROW + SHADOW_SIMPLIFY + 0.001, REGION_TOL)
         .simplified(0.001)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::DVec3;
+    use crate::model::Cutting;
+
+    /// Upward flat squares (two triangles each) at the heights `zs`.
+    fn flats_at(zs: &[f64]) -> Mesh {
+        let tris = zs
+            .iter()
+            .enumerate()
+            .flat_map(|(k, &z)| {
+                let x = 20.0 * k as f64;
+                let p = |dx: f64, dy: f64| DVec3::new(x + dx, dy, z);
+                [[p(0.0, 0.0), p(10.0, 0.0), p(10.0, 10.0)], [p(0.0, 0.0), p(10.0, 10.0), p(0.0, 10.0)]]
+            })
+            .collect();
+        Mesh { tris, dropped: 0, binary: false }
+    }
+
+    fn job(zs: &[f64], stepdown: f64) -> MeshJob {
+        let mut j = MeshJob::new(
+            "t",
+            flats_at(zs),
+            DVec3::new(-10.0, -10.0, 0.0),
+            DVec3::new(100.0, 20.0, 50.0),
+            Cutting::default(),
+        );
+        j.stepdown = stepdown;
+        j
+    }
+
+    #[test]
+    fn flats_are_levels_and_the_steps_between_them_even() {
+        // 50 → 35: five of 3; 35 → 22: five of 2.6; 22 → 18: two of 2; 18 → 0: six of 3
+        let j = job(&[35.0, 22.0, 18.0], 3.0);
+        let want = [
+            47.0, 44.0, 41.0, 38.0, 35.0, 32.4, 29.8, 27.2, 24.6, 22.0, 20.0, 18.0, 15.0, 12.0, 9.0, 6.0, 3.0, 0.0,
+        ];
+        let got = j.levels();
+        assert_eq!(got.len(), want.len(), "{got:?}");
+        for (g, w) in got.iter().zip(want) {
+            assert!((g - w).abs() < 1e-9, "{got:?}");
+        }
+        // no step deeper than the step-down, none a sliver
+        assert!(got.windows(2).all(|w| w[0] - w[1] <= 3.0 + 1e-9 && w[0] - w[1] >= 2.0 - 1e-9));
+        assert!((j.level_depth() - 50.0 / 18.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn flats_at_the_top_or_the_floor_or_together_make_one_level() {
+        let j = job(&[50.0, 49.99, 35.0, 34.99, 0.005], 20.0);
+        assert_eq!(j.levels(), vec![35.0, 17.5, 0.0]);
+    }
 }

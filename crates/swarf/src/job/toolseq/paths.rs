@@ -109,7 +109,7 @@ pub(super) fn prepare(job: &MeshJob, db: &ToolDb, opts: &SeqOptions) -> Result<P
     // biggest first; equal diameters in the file's order
     let mut order: Vec<usize> = (0..db.tools.len()).collect();
     order.sort_by(|&a, &b| db.tools[b].diameter.total_cmp(&db.tools[a].diameter).then(a.cmp(&b)));
-    let tool_levels: Vec<Vec<f64>> = order.iter().map(|&i| job.levels_every(db.tools[i].depth_of_cut)).collect();
+    let tool_levels: Vec<Vec<f64>> = order.iter().map(|&i| job.levels_on_grid(db.tools[i].depth_of_cut)).collect();
     // every tool's levels, each shadow once, top down
     let mut zs: Vec<f64> = tool_levels.iter().flatten().copied().collect();
     zs.sort_by(|a, b| b.total_cmp(a));
