@@ -422,7 +422,7 @@ fn library_defaults() -> Vec<(&'static str, &'static str, String)> {
         v.extend([
             (cmd, "strategy", Strategy::DEFAULT.name().to_string()),
             (cmd, "tool_diameter", format!("{} for drawings and STL parts", num(swarf::model::Tool::DEFAULT.diameter))),
-            (cmd, "stepover", num(swarf::model::Width::DEFAULT.stepover()) + " for drawings and STL parts"),
+            (cmd, "stepover", num(swarf::model::Width::DEFAULT.stepover()) + " when the input names none"),
             (cmd, "depth", num(Overrides::DEFAULT_DEPTH)),
             (cmd, "feed", format!("{} for drawings and STL parts", num(swarf::model::Cutting::DEFAULT.feed))),
             (cmd, "spindle", format!("{} for drawings and STL parts", num(swarf::model::Cutting::DEFAULT.spindle_rpm))),

@@ -50,9 +50,9 @@ pub enum Width {
 }
 
 impl Width {
-    /// The width of cut of a job that names none: 40 % of the diameter (78.5° in a straight
-    /// cut).
-    pub const DEFAULT: Width = Width::Stepover(0.4);
+    /// The width of cut of a job that names none, whatever the input: 25 % of the diameter (60°
+    /// in a straight cut), within the 10–25 % a machinist expects of adaptive clearing.
+    pub const DEFAULT: Width = Width::Stepover(0.25);
 
     /// Stepover fraction of a straight cut with this width: `s = (1 - cos θ) / 2`, the inverse of
     /// paper 1 eq. 3, `θ = 90° + asin(2s − 1)`.
@@ -104,7 +104,7 @@ pub struct Cutting {
 
 impl Cutting {
     /// swarf's cutting data for what an input does not say: [`Tool::DEFAULT`] (Ø6 mm),
-    /// [`Width::DEFAULT`] (40 %), 1000 mm/min feed, 5000 mm/min rapids for the time estimates,
+    /// [`Width::DEFAULT`] (25 %), 1000 mm/min feed, 5000 mm/min rapids for the time estimates,
     /// the machine's highest feed at its rapid rate, 10 000 rpm.
     pub const DEFAULT: Cutting = Cutting {
         tool: Tool::DEFAULT,

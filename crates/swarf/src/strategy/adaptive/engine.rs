@@ -579,7 +579,9 @@ pub(super) mod fixture {
     impl Pocket {
         pub(in super::super) fn new(climb: bool) -> Pocket {
             let part = Area::rect(-5.0, -5.0, 25.0, 15.0).difference(&Area::rect(0.0, 0.0, 20.0, 10.0));
-            let job = Job::new("pocket", Area::rect(0.0, 0.0, 20.0, 10.0), part, 4.0, 2.0);
+            let mut job = Job::new("pocket", Area::rect(0.0, 0.0, 20.0, 10.0), part, 4.0, 2.0);
+            // (the tests' geometry is drawn for a 40 % stepover, 78.5°)
+            job.cutting.width = crate::model::Width::Stepover(0.4);
             let link = LinkOptions { climb, ..LinkOptions::DEFAULT };
             let sim = SimOptions { res: Some(0.05), ..SimOptions::DEFAULT };
             let opts = AdaptiveOptions::DEFAULT;
