@@ -783,11 +783,7 @@ impl Scene {
     }
 
     fn of_mesh(job: &swarf::model::MeshJob, levels: &[f64]) -> Scene {
-        let levels = levels
-            .iter()
-            .zip(job.shadows(levels))
-            .map(|(&z, part)| swarf::plot::Level { z, part })
-            .collect();
+        let levels = levels.iter().zip(job.shadows(levels)).map(|(&z, part)| swarf::plot::Level { z, part }).collect();
         Scene { part: job.outline(), stock: job.stock_area(), fixtures: swarf::geom::Area::empty(), levels }
     }
 }

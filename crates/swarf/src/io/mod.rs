@@ -544,7 +544,10 @@ mod tests {
             line.starts_with("read drawing 80.0 × 50.0 mm, 3.00 mm deep (millimetres: $INSUNITS = 4): 2 contours"),
             "{line}"
         );
-        assert!(line.contains("1 pocket") && line.contains("tool Ø6 mm, stepover 25% (1.5 mm, reference engagement 60.0°)"), "{line}");
+        assert!(
+            line.contains("1 pocket") && line.contains("tool Ø6 mm, stepover 25% (1.5 mm, reference engagement 60.0°)"),
+            "{line}"
+        );
         assert!(r.warnings.is_empty(), "{:?}", r.warnings);
     }
 }

@@ -266,9 +266,8 @@ mod tests {
     fn flats_are_levels_and_the_steps_between_them_even() {
         // 50 → 35: five of 3; 35 → 22: five of 2.6; 22 → 18: two of 2; 18 → 0: six of 3
         let j = job(&[35.0, 22.0, 18.0], 3.0);
-        let want = [
-            47.0, 44.0, 41.0, 38.0, 35.0, 32.4, 29.8, 27.2, 24.6, 22.0, 20.0, 18.0, 15.0, 12.0, 9.0, 6.0, 3.0, 0.0,
-        ];
+        let want =
+            [47.0, 44.0, 41.0, 38.0, 35.0, 32.4, 29.8, 27.2, 24.6, 22.0, 20.0, 18.0, 15.0, 12.0, 9.0, 6.0, 3.0, 0.0];
         let got = j.levels();
         assert_eq!(got.len(), want.len(), "{got:?}");
         for (g, w) in got.iter().zip(want) {

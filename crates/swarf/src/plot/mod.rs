@@ -338,8 +338,7 @@ pub fn svg(f: &Figure) -> String {
             let (x, y) = (20.0 + c as f64 * (pw + gap), 660.0 + r as f64 * (ph + 30.0));
             let pv = View::fit(lo, hi, x, y + 18.0, pw, ph);
             let keep = |i: usize| of.get(i).copied().flatten() == Some(k);
-            let cut: f64 =
-                f.replay.samples.iter().filter(|sm| keep(sm.mi as usize)).map(|sm| f64::from(sm.len)).sum();
+            let cut: f64 = f.replay.samples.iter().filter(|sm| keep(sm.mi as usize)).map(|sm| f64::from(sm.len)).sum();
             let _ = writeln!(
                 o,
                 r##"<rect x="{x:.1}" y="{:.1}" width="{pw:.1}" height="{ph:.1}" fill="#f4f4f4"/><text x="{x:.1}" y="{:.1}" font-size="12">level {} of {n}: z {:.2}, {:.2} m cut</text>"##,

@@ -249,7 +249,8 @@ pub(crate) fn top_view(
     let s = sim.heights();
     let (slo, shi) = (job.stock_lo, job.stock_hi);
     // the stock box's cells only
-    let (i0, j0) = (((slo.x - g.x0) / g.res).floor().max(0.0) as usize, ((slo.y - g.y0) / g.res).floor().max(0.0) as usize);
+    let (i0, j0) =
+        (((slo.x - g.x0) / g.res).floor().max(0.0) as usize, ((slo.y - g.y0) / g.res).floor().max(0.0) as usize);
     let (i1, j1) =
         ((((shi.x - g.x0) / g.res).ceil() as usize).min(g.nx), (((shi.y - g.y0) / g.res).ceil() as usize).min(g.ny));
     let (w, h) = (i1.saturating_sub(i0), j1.saturating_sub(j0));

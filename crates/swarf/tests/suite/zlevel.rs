@@ -174,7 +174,8 @@ fn the_rest_on_a_slope_is_terraces() {
     let Input::Mesh(job) = swarf::io::load_input(&dir.join("wedge.json"), &Default::default()).unwrap() else {
         panic!("a 3D case reads as a mesh job")
     };
-    let opts = RoughOptions { sim: swarf::sim::SimOptions { res: Some(0.1), ..Default::default() }, ..Default::default() };
+    let opts =
+        RoughOptions { sim: swarf::sim::SimOptions { res: Some(0.1), ..Default::default() }, ..Default::default() };
     let r = swarf::job::zlevel::rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{e}")).report;
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!((r.gouges, r.rapid_collisions), (0, 0));
