@@ -3,7 +3,8 @@
 //! is really left. For each pass: a keep-down link at depth through cleared space when the tool
 //! is down (a short feed move while it leaves the material, then a rapid; a short step through
 //! material as a cut), else a lift to the minimum retract and an entry, the first that fits of a
-//! descent into free or cleared space, a lateral landing, a helix, a ramp and, noted, a plunge;
+//! descent into free or cleared space, a lateral landing, a helix, a ramp, a helix round a
+//! centre nearby and, noted, a plunge;
 //! then the pass, arc-fitted and cut into the model. The walk-through, with a figure, is in
 //! `docs/linking.md`.
 
@@ -482,6 +483,18 @@ impl<'a, M: Material> Linker<'a, M> {
             self.ramp(&prefix, top_r + approach, z);
             return;
         }
+        // a helix round a centre nearby that ends by the start (a pass that starts on the wall
+        // of a bore just wider than the tool: the bore's centre has the room)
+        if let Some((c, rh)) = self.helix_near(start, pts) {
+            let top_h = self.top_near(c, r + rh + 0.05).max(z);
+            let on = start - c;
+            // (started so that it ends on the way from the centre to the start)
+            let turn = self.helix_turn(rh, top_h + approach, z);
+            let a0 = on.y.atan2(on.x) - if self.link.climb { turn } else { -turn };
+            self.helix_down(c, rh, top_h + approach, z, a0);
+            self.push_line(MoveKind::Cut, start.extend(z), self.feed);
+            return;
+        }
         // a longer way in sideways before a plunge
         if let Some(p) = self.lateral_landing(start, z, 4.0 * r) {
             self.land_and_approach(p, start, z);
@@ -491,6 +504,34 @@ impl<'a, M: Material> Linker<'a, M> {
         self.travel(start, top + approach);
         self.tp.note("plunge: no room for a helix or a ramp");
         self.push_line(MoveKind::Plunge, start.extend(z), self.entry_feed);
+    }
+
+    /// A helix near `start` for a start with no room for one itself (a pass that starts on the
+    /// wall of a bore just wider than the tool): a centre with room for a helix of at least the
+    /// smallest radius, whose circle holds `start` or passes within a tenth of that radius
+    /// outside it; the centre and the radius, the largest radius (up to the one the options
+    /// want) among the centroid of the pass `pts` and centres round `start` at 24 headings and
+    /// 8 distances.
+    fn helix_near(&self, start: DVec2, pts: &[DVec2]) -> Option<(DVec2, f64)> {
+        let r = self.r;
+        let (lo, hi) = (self.link.helix_min_frac * r, self.link.helix_radius_frac * r);
+        let centroid = pts.iter().fold(DVec2::ZERO, |a, p| a + *p) / pts.len().max(1) as f64;
+        let around = (1..=8).flat_map(|k| {
+            (0..24).map(move |j| {
+                let a = j as f64 * std::f64::consts::TAU / 24.0;
+                start + hi * k as f64 / 8.0 * DVec2::new(a.cos(), a.sin())
+            })
+        });
+        let mut best: Option<(DVec2, f64)> = None;
+        for c in std::iter::once(centroid).chain(around) {
+            let kd = self.sim.keep_distance(&Path::Line { a: c.extend(0.0), b: c.extend(0.0) }, 10.0 * r);
+            let rh = (kd - r - self.link.arc_tol - 0.005).min(hi);
+            let off = (start - c).length();
+            if rh >= lo && off <= rh + 0.1 * lo && best.is_none_or(|b| rh > b.1 + 1e-9) {
+                best = Some((c, rh));
+            }
+        }
+        best
     }
 
     /// The nearest point within `max` of `start` where the tool can land at `z` (no material
@@ -546,8 +587,7 @@ impl<'a, M: Material> Linker<'a, M> {
         self.travel(c, z_from);
         self.tp.note(format!("helix entry r {:.3} at X{:.3} Y{:.3}", rh, c.x, c.y));
         self.push_line(MoveKind::Rapid, on(a0).extend(z_from), 0.0);
-        let pitch = std::f64::consts::TAU * rh * self.link.ramp_angle_deg.to_radians().tan();
-        let total = std::f64::consts::TAU * ((z_from - z) / pitch.max(1e-6));
+        let total = self.helix_turn(rh, z_from, z);
         let n = (total / std::f64::consts::PI).ceil().max(1.0) as usize;
         let s = if ccw { 1.0 } else { -1.0 };
         for k in 1..=n {
@@ -562,6 +602,13 @@ impl<'a, M: Material> Linker<'a, M> {
         self.push_arc(MoveKind::Cut, on(a_end + s * std::f64::consts::PI).extend(z), c, ccw, self.feed);
         self.push_arc(MoveKind::Cut, on(a_end).extend(z), c, ccw, self.feed);
         a_end
+    }
+
+    /// The angle a helix of radius `rh` turns through from `z_from` down to `z` at the ramp
+    /// angle, radians.
+    fn helix_turn(&self, rh: f64, z_from: f64, z: f64) -> f64 {
+        let pitch = std::f64::consts::TAU * rh * self.link.ramp_angle_deg.to_radians().tan();
+        std::f64::consts::TAU * ((z_from - z) / pitch.max(1e-6))
     }
 
     pub(crate) fn ramp(&mut self, prefix: &[DVec2], z_from: f64, z: f64) {
@@ -835,6 +882,41 @@ mod tests {
         let down = &l.tp.moves[before..];
         assert!(down.iter().all(|m| m.is_rapid() || m.kind == MoveKind::Descend), "{down:?}");
         assert_eq!(down.last().map(|m| (m.kind, m.to)), Some((MoveKind::Descend, at.extend(z))));
+    }
+
+    /// A square bore 0.8 mm wider than the tool and a pass that starts 0.35 mm off its centre:
+    /// no room for a helix at the start, but round a centre nearby whose circle holds the start:
+    /// the tool goes down on that circle and ends where the pass starts, without a plunge.
+    #[test]
+    fn a_helix_off_the_start_when_the_start_has_no_room() {
+        let p = Pocket::new(4.8, 4.8);
+        let z = p.z();
+        let start = DVec2::new(2.75, 2.4);
+        let mut l = p.linker(start);
+        l.enter(start, &[start, DVec2::new(2.75, 2.5)], z, 0.01);
+        assert!(noted(&l, "helix entry"), "{:?}", l.tp.notes);
+        assert_eq!(count(&l.tp.moves, MoveKind::Plunge), 0);
+        let entry: Vec<&Move> = l.tp.moves.iter().filter(|m| m.kind == MoveKind::Entry).collect();
+        let Motion::Arc { center: c, .. } = entry[0].motion else { panic!("{:?}", entry[0]) };
+        // every arc of it on a circle round that centre, which holds the start (or nearly), and
+        // it ends at the start, at depth
+        let rh =
+            l.tp.moves
+                .iter()
+                .filter(|m| m.kind == MoveKind::Entry)
+                .map(|m| (m.to.truncate() - c).length())
+                .fold(0.0, f64::max);
+        assert!(
+            rh >= l.link.helix_min_frac * l.r - 1e-9 && (start - c).length() <= 1.1 * rh,
+            "a helix of {rh} mm round {c:?}"
+        );
+        for m in l.tp.moves.iter().filter(|m| matches!(m.motion, Motion::Arc { .. })) {
+            assert!(((m.to.truncate() - c).length() - rh).abs() < 1e-9, "{m:?}");
+        }
+        assert!((l.tp.end() - start.extend(z)).length() < 1e-9, "{:?}", l.tp.end());
+        // and it keeps off the bore's walls (x and y 0 and 4.8)
+        let wall = c.x.min(c.y).min(4.8 - c.x).min(4.8 - c.y);
+        assert!(rh + l.r <= wall, "centre {c:?}, r {rh}");
     }
 
     /// A pocket just wider than the tool each way and a pass too short to ramp along: no
