@@ -72,10 +72,14 @@ pub fn png(p: &RestPicture) -> Result<Vec<u8>> {
         .map_err(|e| Error::Output { what: "picture".into(), reason: format!("cannot encode the PNG: {e}") })
 }
 
+/// Terraces thinner than this are not drawn, mm: a floor a level leaves a few hundredths above
+/// (a flat's level at its highest facet) is no terrace to the eye.
+const TERRACE_SHOWN: f32 = 0.05;
+
 /// A 3D job's stock after its program from above ([`TopView`]) as PNG bytes, a pixel a block:
-/// grey by height (dark is deep), amber where a terrace stands (stronger the thicker, full at
-/// 3 mm), red where material the tool could have cut stands (full from 0.5 mm), white where
-/// there is no stock.
+/// grey by height (dark is deep), amber where a terrace thicker than [`TERRACE_SHOWN`] stands
+/// (stronger the thicker, full at 3 mm), red where material the tool could have cut stands
+/// (full from 0.5 mm), white where there is no stock.
 pub fn top_view_png(v: &TopView) -> Result<Vec<u8>> {
     let empty = || Error::Output { what: "picture".into(), reason: "it is empty".into() };
     let n = v.nx * v.ny;
@@ -94,7 +98,7 @@ pub fn top_view_png(v: &TopView) -> Result<Vec<u8>> {
                 let blend = |c: (f64, f64, f64), a: f64| (g + (c.0 - g) * a, g + (c.1 - g) * a, g + (c.2 - g) * a);
                 if v.beyond[b] > 0.0 {
                     blend((220.0, 20.0, 20.0), (0.5 + f64::from(v.beyond[b])).min(1.0))
-                } else if v.terrace[b] > 0.0 {
+                } else if v.terrace[b] > TERRACE_SHOWN {
                     blend((245.0, 175.0, 40.0), 0.25 + 0.5 * (f64::from(v.terrace[b]) / 3.0).min(1.0))
                 } else {
                     (g, g, g)
@@ -155,7 +159,7 @@ mod tests {
             y0: 0.0,
             side: 1.0,
             height: vec![0.0, -5.0, -5.0, f32::NAN],
-            terrace: vec![0.0, 3.0, 0.0, 0.0],
+            terrace: vec![0.02, 3.0, 0.0, 0.0],
             beyond: vec![0.0, 0.0, 2.0, 0.0],
             top: 0.0,
             bottom: -10.0,
@@ -167,7 +171,10 @@ mod tests {
             (p.red(), p.green(), p.blue())
         };
         let (top, terrace, beyond, none) = (at(0), at(1), at(2), at(3));
-        assert!(top.0 == top.1 && top.1 == top.2 && top.0 == 240, "the stock top light grey: {top:?}");
+        assert!(
+            top.0 == top.1 && top.1 == top.2 && top.0 == 240,
+            "the stock top light grey (a terrace too thin to see): {top:?}"
+        );
         assert!(terrace.0 > terrace.1 && terrace.1 > terrace.2, "amber: {terrace:?}");
         assert_eq!(beyond, (220, 20, 20), "red");
         assert_eq!(none, (255, 255, 255), "no stock");
