@@ -424,6 +424,14 @@ fn library_defaults() -> Vec<(&'static str, &'static str, String)> {
             (cmd, "tool_diameter", format!("{} for drawings and STL parts", num(swarf::model::Tool::DEFAULT.diameter))),
             (cmd, "stepover", num(swarf::model::Width::DEFAULT.stepover()) + " when the input names none"),
             (cmd, "depth", num(Overrides::DEFAULT_DEPTH)),
+            (
+                cmd,
+                "stepdown",
+                format!(
+                    "{} × the tool diameter for STL parts; drawings are cut in one level",
+                    num(swarf::model::MeshJob::DEFAULT_STEPDOWN_FRACTION)
+                ),
+            ),
             (cmd, "feed", format!("{} for drawings and STL parts", num(swarf::model::Cutting::DEFAULT.feed))),
             (cmd, "spindle", format!("{} for drawings and STL parts", num(swarf::model::Cutting::DEFAULT.spindle_rpm))),
             (cmd, "max_feed", "the rapid rate".to_string()),

@@ -280,6 +280,9 @@ impl Reading {
             c.stepover_mm(),
             c.width.engagement_deg()
         ));
+        if let Input::Mesh(j) = input {
+            line.push_str(&format!(", step-down {} mm", crate::post::num(j.stepdown, 3)));
+        }
         for i in &self.inferred {
             line.push_str(&format!("; {i}"));
         }
@@ -325,8 +328,9 @@ pub fn load_job(path: &Path, ov: &Overrides) -> Result<Job> {
 /// by `stock_above` on top, none by default; its bottom at the part's lowest point), is placed
 /// by `placement` (after the units' scale), and is roughed to its lowest point with the default
 /// cutting data ([`Cutting::DEFAULT`]) and step-downs of [`MeshJob::DEFAULT_STEPDOWN_FRACTION`]
-/// of the tool diameter unless the overrides say otherwise. A drawing is cut [`Overrides::DEFAULT_DEPTH`] deep with the default
-/// cutting data (see [`drawing::job_from_drawing`]).
+/// of the tool diameter unless the overrides say otherwise. A drawing is cut
+/// [`Overrides::DEFAULT_DEPTH`] deep with the default cutting data (see
+/// [`drawing::job_from_drawing`]).
 ///
 /// ```
 /// use swarf::{Input, Overrides, Setting, Width, load_input};

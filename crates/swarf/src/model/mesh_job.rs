@@ -43,8 +43,13 @@ const SHADOW_SIMPLIFY: f64 = 0.004;
 const LEVEL_MERGE: f64 = 0.02;
 
 impl MeshJob {
-    /// The step-down of a mesh job that names none, as a fraction of the tool diameter.
-    pub const DEFAULT_STEPDOWN_FRACTION: f64 = 0.5;
+    /// The step-down of a mesh job that names none, as a fraction of the tool diameter: one
+    /// diameter. Adaptive clearing holds the width of cut light (a quarter of the diameter by
+    /// default) so that the tool can cut deep with its flank; a diameter is within the flutes
+    /// of any standard end mill and under the one and a half to two diameters tool makers
+    /// give for aluminium. Terraces on slopes are then up to a diameter thick (reported apart
+    /// from the rest); `stepdown` or `--stepdown` sets it.
+    pub const DEFAULT_STEPDOWN_FRACTION: f64 = 1.0;
 
     /// A job on `mesh` in the stock box `stock_lo`–`stock_hi`, cut to the bottom of the box with
     /// no allowance and step-downs of [`MeshJob::DEFAULT_STEPDOWN_FRACTION`] of the tool
