@@ -148,19 +148,30 @@ impl MeshJob {
         (top - bottom) / self.levels().len().max(1) as f64
     }
 
+    /// The lowest level and the part's flats above it and under the stock top (raised by the
+    /// floor allowance): the floor (with its allowance on top, protected like the part), raised
+    /// to a flat that lies less than [`LEVEL_MERGE`] above it. A part whose lowest point is a
+    /// few units in the last place under its base (float noise in the file) would otherwise get
+    /// its last level under the base, whose shadow then holds the whole base: nothing cut there.
+    fn bottom_and_flats(&self) -> (f64, Vec<f64>) {
+        let top = self.stock_hi.z;
+        let mut bottom = self.floor + self.allowance_floor;
+        let flats: Vec<f64> =
+            crate::geom::mesh::flats(&self.mesh, 1e-6).into_iter().map(|f| f + self.allowance_floor).collect();
+        if let Some(&f) = flats.iter().filter(|&&f| f >= bottom && f <= bottom + LEVEL_MERGE && f < top).last() {
+            bottom = f;
+        }
+        let between = flats.into_iter().filter(|&z| z < top - LEVEL_MERGE && z > bottom + LEVEL_MERGE).collect();
+        (bottom, between)
+    }
+
     /// The levels as [`MeshJob::levels`] with step-downs of at most `stepdown`.
     pub fn levels_every(&self, stepdown: f64) -> Vec<f64> {
         let top = self.stock_hi.z;
-        // (the floor is protected like the part: with its allowance on top)
-        let bottom = self.floor + self.allowance_floor;
+        let (bottom, flats) = self.bottom_and_flats();
         // the breaks: the stock top, the flats, the floor
         let mut breaks = vec![top, bottom];
-        for f in crate::geom::mesh::flats(&self.mesh, 1e-6) {
-            let z = f + self.allowance_floor;
-            if z < top - LEVEL_MERGE && z > bottom + LEVEL_MERGE {
-                breaks.push(z);
-            }
-        }
+        breaks.extend(flats);
         breaks.sort_by(|a, b| b.total_cmp(a));
         breaks.dedup_by(|a, b| (*b - *a).abs() <= LEVEL_MERGE);
         let mut zs = Vec::new();
@@ -183,16 +194,11 @@ impl MeshJob {
     /// [`MeshJob::levels`] avoids for one tool).
     pub fn levels_on_grid(&self, depth: f64) -> Vec<f64> {
         let top = self.stock_hi.z;
-        let bottom = self.floor + self.allowance_floor;
+        let (bottom, flats) = self.bottom_and_flats();
         let n = (((top - bottom) / depth) - 1e-9).ceil().max(1.0) as usize;
         let mut zs: Vec<f64> =
             (1..=n).map(|i| if i == n { bottom } else { top - (top - bottom) * i as f64 / n as f64 }).collect();
-        for f in crate::geom::mesh::flats(&self.mesh, 1e-6) {
-            let z = f + self.allowance_floor;
-            if z < top - LEVEL_MERGE && z > bottom + LEVEL_MERGE {
-                zs.push(z);
-            }
-        }
+        zs.extend(flats);
         zs.sort_by(|a, b| b.total_cmp(a));
         zs.dedup_by(|a, b| (*b - *a).abs() <= LEVEL_MERGE);
         zs
@@ -285,7 +291,13 @@ mod tests {
 
     #[test]
     fn flats_at_the_top_or_the_floor_or_together_make_one_level() {
-        let j = job(&[50.0, 49.99, 35.0, 34.99, 0.005], 20.0);
+        let j = job(&[50.0, 49.99, 35.0, 34.99, -0.005], 20.0);
         assert_eq!(j.levels(), vec![35.0, 17.5, 0.0]);
+        // a flat a hair above the floor is the lowest level (else the base, above the last
+        // level, is in its shadow and never cut)
+        let j = job(&[35.0, 1e-9], 20.0);
+        let want = [35.0, 35.0 - (35.0 - 1e-9) / 2.0, 1e-9];
+        assert_eq!(j.levels(), want.to_vec());
+        assert_eq!(*j.levels_on_grid(10.0).last().unwrap(), 1e-9);
     }
 }
