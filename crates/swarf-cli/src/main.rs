@@ -526,13 +526,22 @@ fn main() -> ExitCode {
     };
     // (swarf's own messages at the level asked for; the libraries it uses only when they fail,
     // unless RUST_LOG says otherwise)
-    env_logger::Builder::new()
+    let mut logger = env_logger::Builder::new();
+    logger
         .filter_level(log::LevelFilter::Error)
         .filter_module("swarf", level)
         .filter_module("swarf_import", level)
         .parse_default_env()
-        .format_target(false)
-        .init();
+        .format_target(false);
+    if cli.verbose == 0 {
+        // (a user's warnings read like the rest of swarf's: no time stamp, no level tag)
+        logger.format(|buf, rec| {
+            use std::io::Write as _;
+            let what = if rec.level() == log::Level::Error { "error" } else { "warning" };
+            writeln!(buf, "swarf: {what}: {}", rec.args())
+        });
+    }
+    logger.init();
     let res = match cli.cmd {
         Cmd::Rough(a) => rough(a),
         Cmd::Plan(a) => plan(a),

@@ -114,6 +114,11 @@ pub struct SimOptions {
     pub sample_step: Option<f64>,
     /// Refuse grids larger than this many cells.
     pub max_cells: usize,
+    /// The cell chosen for the tool ([`SimOptions::res_for`]) is coarsened to keep a job's
+    /// grid within this many cells (see [`SimOptions::fitted`]): time and memory grow with the
+    /// cells, and a large plate needs no finer cell than a small pocket does. A cell the user
+    /// gives is never changed.
+    pub auto_cells: usize,
     /// Heights that override the job's flat stock top and part walls where they say more: the
     /// state a 3D job's earlier levels and tools left, and the part's surface (see
     /// [`HeightMap`]).
@@ -134,9 +139,9 @@ pub struct SimOptions {
 }
 
 impl SimOptions {
-    /// The cell size for the tool ([`SimOptions::res_for`]), 0.01 mm gouge tolerance and
-    /// engagement threshold, samples every half cell, at most 60 million cells, the raster
-    /// engine, the exact engagement where the pixels leave it in doubt.
+    /// The cell size for the tool ([`SimOptions::res_for`]) within 20 million cells, 0.01 mm
+    /// gouge tolerance and engagement threshold, samples every half cell, at most 60 million
+    /// cells, the raster engine, the exact engagement where the pixels leave it in doubt.
     pub const DEFAULT: SimOptions = SimOptions {
         res: None,
         tol: 0.01,
@@ -144,6 +149,7 @@ impl SimOptions {
         ring_delta: 1e-4,
         sample_step: None,
         max_cells: 60_000_000,
+        auto_cells: 20_000_000,
         heights: None,
         sure_links: false,
         engine: SimEngine::Raster,
@@ -168,8 +174,8 @@ impl SimOptions {
                 return Err(Error::setting(Setting::Simulation, format!("{what} {v} mm: must be zero or positive")));
             }
         }
-        if self.max_cells == 0 {
-            return Err(Error::setting(Setting::Simulation, "max_cells: must be positive"));
+        if self.max_cells == 0 || self.auto_cells == 0 {
+            return Err(Error::setting(Setting::Simulation, "max_cells, auto_cells: must be positive"));
         }
         Ok(())
     }
@@ -214,7 +220,8 @@ impl SimOptions {
 
     /// The options with the cell chosen to fit a job whose stock spans `lo`..`hi` (mm) with a
     /// tool of diameter `d`: `None` when no cell is given and the tool's cell keeps the grid
-    /// (the span grown by ten radii and 20 mm) within nine tenths of [`SimOptions::max_cells`];
+    /// (the span grown by ten radii and 20 mm) within nine tenths of [`SimOptions::auto_cells`]
+    /// (or [`SimOptions::max_cells`], if fewer);
     /// else the cell coarsened just enough, up to [`SimOptions::COARSEST_CELL_PER_DIAMETER`] of
     /// the diameter (beyond that the grid stays too large and the model refuses it, naming the
     /// cell). A cell the user gave is never changed.
@@ -227,7 +234,8 @@ impl SimOptions {
         if !(span.x.is_finite() && span.y.is_finite()) {
             return None;
         }
-        let budget = 0.9 * self.max_cells as f64;
+        let cells = self.auto_cells.min(self.max_cells);
+        let budget = 0.9 * cells as f64;
         if (span.x / base) * (span.y / base) <= budget {
             return None;
         }
@@ -237,7 +245,7 @@ impl SimOptions {
             "the job spans {:.0} × {:.0} mm: the simulation's cell is {res:.3} mm instead of {base:.3} mm to keep within {} million cells (--res sets it)",
             hi.x - lo.x,
             hi.y - lo.y,
-            self.max_cells / 1_000_000
+            cells / 1_000_000
         );
         Some(SimOptions { res: Some(res), ..self.clone() })
     }
@@ -259,7 +267,7 @@ mod tests {
         let res = f.res.unwrap();
         assert!(res > 0.06 && res <= 0.6, "{res}");
         let span = DVec2::new(800.0, 700.0) + DVec2::splat(5.0 * 6.0 + 20.0);
-        assert!((span.x / res) * (span.y / res) <= 0.9 * o.max_cells as f64);
+        assert!((span.x / res) * (span.y / res) <= 0.9 * o.auto_cells as f64);
         // never coarser than a tenth of the tool: beyond, the model refuses the grid
         let huge = o.fitted(6.0, lo, DVec2::new(1e5, 1e5)).unwrap();
         assert!((huge.res.unwrap() - 0.6).abs() < 1e-12, "{:?}", huge.res);
