@@ -88,7 +88,8 @@ struct PlacementOpts {
     #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
     part_scale: Option<f64>,
     /// STL part on its own: rotations about X, Y and Z in degrees, in that order (−90,0,0 turns a
-    /// Y-up part Z-up).
+    /// Y-up part Z-up). Without it a part drawn sideways is laid flat on its back; 0,0,0 keeps
+    /// it as drawn.
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     part_rotate: Option<String>,
     /// STL part on its own: translation after scaling and rotating, mm.
@@ -600,6 +601,8 @@ fn placement(o: &PlacementOpts) -> Result<Overrides, Failure> {
     });
     if let Some(r) = &o.part_rotate {
         ov.placement.rotate_deg = triple(r, Setting::PartRotate)?;
+        // (a rotation given, even 0,0,0, keeps the part as the user turned it)
+        ov.lay_flat = false;
     }
     if let Some(t) = &o.part_translate {
         ov.placement.translate = swarf::geom::DVec3::from_array(triple(t, Setting::PartTranslate)?);

@@ -35,6 +35,10 @@ pub struct Overrides {
     pub import: swarf_import::ImportOptions,
     /// Placement of an STL part read on its own (its units' scale comes from `import.units`).
     pub placement: Placement,
+    /// An STL part read on its own that was drawn sideways (its flat faces facing X or Y) is
+    /// laid flat on its back ([`stl::lay_flat`]) when no rotation is given; false keeps it as
+    /// drawn (the command line's `--part-rotate`, whatever its angles, says false).
+    pub lay_flat: bool,
     /// Stock round an STL part read on its own: its bounds grown by this sideways, mm.
     pub stock_margin: f64,
     /// Stock above an STL part read on its own, mm: 0 (the default) puts the stock's top at
@@ -61,6 +65,7 @@ impl Overrides {
         allowance: None,
         import: swarf_import::ImportOptions::DEFAULT,
         placement: Placement::IDENTITY,
+        lay_flat: true,
         stock_margin: 2.0,
         stock_above: 0.0,
         cut: drawing::Cut::Auto,
@@ -359,6 +364,19 @@ pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
         let mut place = ov.placement;
         place.scale *= ov.import.units.map_or(1.0, |u| u.mm());
         mesh.transform(&place);
+        if mesh.bounds().is_none() {
+            return Err(Error::input(path, "file", "the mesh is empty"));
+        }
+        let mut sideways = None;
+        if ov.placement.rotate_deg == [0.0; 3] {
+            match stl::lay_flat(&mesh).filter(|_| ov.lay_flat) {
+                Some((rot, what)) => {
+                    mesh.transform(&Placement { rotate_deg: rot, ..Placement::IDENTITY });
+                    reading.inferred.push(what);
+                }
+                None => sideways = stl::orientation_warning(&mesh),
+            }
+        }
         let (lo, hi) = mesh.bounds().ok_or_else(|| Error::input(path, "file", "the mesh is empty"))?;
         reading.kind = "STL part";
         reading.triangles = mesh.tris.len();
@@ -371,9 +389,7 @@ pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
         if ov.import.units.is_none() && ov.placement.scale == 1.0 {
             reading.warnings.extend(unit_warning(size.max_element()));
         }
-        if ov.placement.rotate_deg == [0.0; 3] {
-            reading.warnings.extend(stl::orientation_warning(&mesh));
-        }
+        reading.warnings.extend(sideways);
         let m = ov.stock_margin;
         if hi.z + ov.stock_above <= lo.z {
             return Err(Error::input(
@@ -494,12 +510,14 @@ mod tests {
 
     #[test]
     fn a_y_up_plate_is_named_and_the_rotation_that_lays_it_flat() {
+        // a plain box: its two sides across Y alike, so it is not turned, only named
         let (_, r) = read_text("yup.stl", &box_stl([100.0, 10.0, 60.0]), &Overrides::DEFAULT).unwrap();
         assert!(
             r.warnings.iter().any(|w| w.contains("face Y") && w.contains("--part-rotate 90,0,0")),
             "{:?}",
             r.warnings
         );
+        assert!(r.inferred.is_empty(), "{:?}", r.inferred);
         // laid flat, or turned by the user: no warning
         let (_, r) = read_text("flat.stl", &box_stl([100.0, 60.0, 10.0]), &Overrides::DEFAULT).unwrap();
         assert!(r.warnings.is_empty(), "{:?}", r.warnings);
@@ -512,6 +530,65 @@ mod tests {
         // a tower, as thin in X as in Y, is left alone
         let (_, r) = read_text("tower.stl", &box_stl([20.0, 20.0, 60.0]), &Overrides::DEFAULT).unwrap();
         assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+    }
+
+    /// A plate drawn Y-up with a pocket in its +Y face: its back (-Y, whole) goes down, the
+    /// pocket faces up (+90° about X); or drawn with the pocket in its -Y face: +Y goes down
+    /// (-90°). X-up alike.
+    /// `--part-rotate`, even 0,0,0, keeps it as drawn (with the warning).
+    #[test]
+    fn a_part_drawn_sideways_is_laid_flat_on_its_back() {
+        // a 100 × 60 plate 10 thick (in Y from 0 to 10) with a 40 × 30 pocket 5 deep in one face
+        let pocketed = |mirror: bool, swap_xy: bool| -> String {
+            let m = crate::geom::mesh::tests::pocket_block(10.0, 5.0);
+            // pocket_block: [0,10]² × [0,10] with a [3,7]² pocket from the top (+Z) down to 5:
+            // stretch it to 100 × 60 and turn its top to +Y (or -Y, or ±X)
+            let mut t = String::from("solid p\n");
+            for tri in &m.tris {
+                t += "facet normal 0 0 0\nouter loop\n";
+                // (y and z swapped is a reflection, and so is each of z → −z and x ↔ y: the
+                // vertex order is reversed for each, so that the facets still face out)
+                let mut vs: Vec<[f64; 3]> =
+                    tri.iter().map(|v| [v.x * 10.0, if mirror { -v.z } else { v.z }, v.y * 6.0]).collect();
+                if swap_xy {
+                    for v in &mut vs {
+                        v.swap(0, 1);
+                    }
+                }
+                if !mirror ^ swap_xy {
+                    vs.swap(1, 2);
+                }
+                for v in vs {
+                    t += &format!("vertex {} {} {}\n", v[0], v[1], v[2]);
+                }
+                t += "endloop\nendfacet\n";
+            }
+            t + "endsolid p\n"
+        };
+        for (mirror, swap_xy, rot) in [
+            (false, false, "+90° about X"),
+            (true, false, "-90° about X"),
+            (false, true, "-90° about Y"),
+            (true, true, "+90° about Y"),
+        ] {
+            let (input, r) = read_text("side.stl", &pocketed(mirror, swap_xy), &Overrides::DEFAULT).unwrap();
+            let Input::Mesh(job) = input else { panic!("a mesh job") };
+            assert!(r.inferred.iter().any(|i| i.contains("laid flat") && i.contains(rot)), "{:?}", r.inferred);
+            assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+            // flat on the table, 10 thick, the pocket's floor (5 below the top) facing up
+            let (lo, hi) = job.mesh.bounds().unwrap();
+            assert!((hi.z - lo.z - 10.0).abs() < 1e-9, "{lo:?} {hi:?}");
+            let flats = crate::geom::mesh::flats(&job.mesh, 1e-6);
+            assert!(
+                flats.len() == 2 && (flats[0] - hi.z).abs() < 1e-9 && (flats[1] - (hi.z - 5.0)).abs() < 1e-9,
+                "{flats:?}, top {}",
+                hi.z
+            );
+            // kept as drawn when the user turns it, even by nothing
+            let kept = Overrides { lay_flat: false, ..Overrides::DEFAULT };
+            let (_, r) = read_text("side2.stl", &pocketed(mirror, swap_xy), &kept).unwrap();
+            assert!(r.inferred.is_empty() && r.warnings.iter().any(|w| w.contains("--part-rotate")), "{r:?}");
+        }
     }
 
     #[test]

@@ -22,15 +22,26 @@ use std::path::Path;
 /// Relative area below which a facet counts as degenerate (of the square of its longest edge).
 const DEGENERATE: f64 = 1e-12;
 
-/// A warning when the part's flat faces mostly face sideways (X or Y) rather than up: a part
-/// drawn Y-up (or X-up) would be roughed standing on its edge. Flat faces are those whose
-/// normal is within 2.6° of an axis; sideways must have at least 1.5 times the area facing Z,
-/// and the part must be thinnest along that axis (under 0.8 of its other extents: a tower,
-/// thin in X and Y alike, is left alone).
-pub fn orientation_warning(mesh: &Mesh) -> Option<String> {
+/// How a part drawn sideways lies: the axis its flat faces mostly face (0: X, 1: Y), their
+/// area and the area facing Z, and the flat area on each of the two faces of its bounding box
+/// across that axis (the low side's, facing down the axis, and the high side's). Flat faces are
+/// those whose normal is within 2.6° of an axis; sideways must have at least 1.5 times the area
+/// facing Z, and the part must be thinnest along that axis (under 0.8 of its other extents: a
+/// tower, thin in X and Y alike, is left alone).
+struct Sideways {
+    axis: usize,
+    side: f64,
+    up: f64,
+    ends: [f64; 2],
+}
+
+fn sideways(mesh: &Mesh) -> Option<Sideways> {
     let (lo, hi) = mesh.bounds()?;
     let ext = hi - lo;
     let mut by_axis = [0.0f64; 3];
+    // flat area on the box's faces across X and Y: [axis][low, high]
+    let mut ends = [[0.0f64; 2]; 2];
+    let tol = 1e-4 * ext.max_element();
     for [a, b, c] in &mesh.tris {
         let n = (*b - *a).cross(*c - *a);
         let len = n.length();
@@ -41,19 +52,63 @@ pub fn orientation_warning(mesh: &Mesh) -> Option<String> {
         for (k, s) in by_axis.iter_mut().enumerate() {
             if u[k].abs() > 0.999 {
                 *s += 0.5 * len;
+                if k < 2 {
+                    let (vmin, vmax) = (a[k].min(b[k]).min(c[k]), a[k].max(b[k]).max(c[k]));
+                    if u[k] < 0.0 && vmax <= lo[k] + tol {
+                        ends[k][0] += 0.5 * len;
+                    } else if u[k] > 0.0 && vmin >= hi[k] - tol {
+                        ends[k][1] += 0.5 * len;
+                    }
+                }
             }
         }
     }
     let (k, side) = if by_axis[1] >= by_axis[0] { (1, by_axis[1]) } else { (0, by_axis[0]) };
     let thinnest = (0..3).filter(|&j| j != k).all(|j| ext[k] < 0.8 * ext[j]);
-    if !(side > 1.5 * by_axis[2] && thinnest) {
+    (side > 1.5 * by_axis[2] && thinnest).then_some(Sideways { axis: k, side, up: by_axis[2], ends: ends[k] })
+}
+
+/// A warning when the part's flat faces mostly face sideways (X or Y) rather than up (see
+/// `Sideways`): a part drawn Y-up (or X-up) would be roughed standing on its edge.
+pub fn orientation_warning(mesh: &Mesh) -> Option<String> {
+    let s = sideways(mesh)?;
+    let (axis, fix) = if s.axis == 1 { ("Y", "90,0,0 or -90,0,0") } else { ("X", "0,90,0 or 0,-90,0") };
+    Some(format!(
+        "most of its flat faces face {axis} ({:.0} mm² against {:.0} mm² facing Z): if it was drawn {axis}-up, --part-rotate {fix} lays it flat (whichever puts the side to cut on top)",
+        s.side, s.up
+    ))
+}
+
+/// The rotation that lays a part drawn sideways (see `Sideways`) flat on its back: of the two
+/// faces of its bounding box across the axis its flats face, the one with clearly more flat
+/// area on it (a tenth more: the whole back against the parting face round a cavity, say)
+/// goes down, and the other side, which holds what there is to cut, faces up. The rotation (as
+/// `--part-rotate` takes it, degrees about X, Y, Z) and what was done, in words; none when the
+/// part is not sideways or its two sides are too alike to tell.
+pub fn lay_flat(mesh: &Mesh) -> Option<([f64; 3], String)> {
+    let s = sideways(mesh)?;
+    let [low, high] = s.ends;
+    let (down_is_high, more, less) = if high >= low { (true, high, low) } else { (false, low, high) };
+    if more < 1.1 * less || more <= 0.0 {
         return None;
     }
-    let (axis, fix) = if k == 1 { ("Y", "90,0,0 or -90,0,0") } else { ("X", "0,90,0 or 0,-90,0") };
-    Some(format!(
-        "most of its flat faces face {axis} ({side:.0} mm² against {:.0} mm² facing Z): if it was drawn {axis}-up, --part-rotate {fix} lays it flat (whichever puts the side to cut on top)",
-        by_axis[2]
-    ))
+    // (+Y down: -90° about X; -Y down: +90°; +X down: +90° about Y; -X down: -90°)
+    let (rot, face) = match (s.axis, down_is_high) {
+        (1, true) => ([-90.0, 0.0, 0.0], "+Y"),
+        (1, false) => ([90.0, 0.0, 0.0], "-Y"),
+        (_, true) => ([0.0, 90.0, 0.0], "+X"),
+        (_, false) => ([0.0, -90.0, 0.0], "-X"),
+    };
+    let deg = |v: f64| format!("{v:+.0}");
+    let what = format!(
+        "laid flat: its flat faces face {} ({:.0} mm² against {:.0} mm² facing Z), the {face} side ({more:.0} mm² of flat face against {less:.0}) is its back: rotated {}° about {} (--part-rotate 0,0,0 keeps it as drawn)",
+        if s.axis == 1 { "Y" } else { "X" },
+        s.side,
+        s.up,
+        deg(if s.axis == 1 { rot[0] } else { rot[1] }),
+        if s.axis == 1 { "X" } else { "Y" },
+    );
+    Some((rot, what))
 }
 
 /// Reads an STL file.
