@@ -162,9 +162,10 @@ fn reach(job: &MeshJob, grid: &Grid, part: &[f32], radius: f64) -> Vec<f32> {
 /// grid): the stock standing more than the simulation's tolerance above it inside the stock box,
 /// where `low` is below the stock top (the area the tool reaches). Split by the program's
 /// `levels` (tool-tip heights): where the stock stands no higher than the lowest level (or the
-/// stock top) at or above `low`, the rest is a terrace z-level roughing leaves by design (on a slope, between a
-/// level and the surface below it); above that, the tool could have cut it at a level and did
-/// not. `far` is the reach the split is judged by (see [`mesh_rest`]; `low` itself, or higher).
+/// stock top) at or above `low`, the rest is a terrace z-level roughing leaves by design (on a
+/// slope, between a level and the surface below it); above that, the tool could have cut it at
+/// a level and did not. `far` is the reach the split is judged by (see [`mesh_rest`]; `low`
+/// itself, or higher).
 pub(crate) fn rest_above(job: &MeshJob, sim: &RasterSim, low: &[f32], far: &[f32], levels: &[f64]) -> Rest {
     let terraces = Terraces::new(job, levels);
     let g = sim.grid;
