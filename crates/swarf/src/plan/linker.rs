@@ -87,6 +87,10 @@ pub(crate) struct Linker<'a, M = RasterSim> {
     /// tests three quarters of a cell further (a half-cut cell holds material up to 0.71 cell
     /// from its centre).
     pub(crate) clear_margin: f64,
+    /// The bores this program plunged straight down (centre and level): a later entry nearby
+    /// at that level goes down one of them again, through space already cut, instead of
+    /// plunging a second time.
+    pub(crate) bores: Vec<(DVec2, f64)>,
 }
 
 impl<'a> Linker<'a> {
@@ -129,7 +133,31 @@ impl<'a, M: Material> Linker<'a, M> {
             step: job.stepover_mm(),
             precut: false,
             clear_margin: 0.0,
+            bores: Vec::new(),
         }
+    }
+
+    /// Plunges straight down at `c` to `z` from the approach height above `top`, noted with
+    /// `why`: the last resort of an entry. The bore is kept for later entries (see
+    /// [`Linker::down_a_bore`]).
+    pub(crate) fn plunge(&mut self, c: DVec2, top: f64, z: f64, why: &str) {
+        self.travel(c, top + self.link.approach);
+        self.tp.note(format!("plunge: {why}"));
+        self.push_line(MoveKind::Plunge, c.extend(z), self.entry_feed);
+        self.bores.push((c, z));
+    }
+
+    /// A bore this program plunged at level `z` from which the tool can go sideways to `start`
+    /// (within a radius, without touching the part): the nearest such. (The plunge cut the
+    /// tool's whole cylinder down to `z`, and material is only ever taken away: going down it
+    /// again cuts nothing, whatever the model's cells read at its edge.)
+    fn bore_to(&self, start: DVec2, z: f64) -> Option<DVec2> {
+        self.bores
+            .iter()
+            .filter(|(c, zb)| (zb - z).abs() < 1e-9 && (start - *c).length() <= self.r)
+            .map(|(c, _)| *c)
+            .filter(|&c| self.keep_safe(c, start, z))
+            .min_by(|a, b| (start - *a).length_squared().total_cmp(&(start - *b).length_squared()))
     }
 
     /// Cuts the finishing contours of each level (`finish[i] = (z, passes)`), after the roughing.
@@ -495,15 +523,22 @@ impl<'a, M: Material> Linker<'a, M> {
             self.push_line(MoveKind::Cut, start.extend(z), self.feed);
             return;
         }
+        // down a bore this program already plunged at this level, then sideways (a clean-up
+        // contour round a bore barely wider than the tool, after the pass that plunged it)
+        if let Some(c) = self.bore_to(start, z) {
+            self.travel(c, self.top_near(c, r + LANDING_MARGIN).max(z) + approach);
+            self.tp.note("entry down a bore plunged before");
+            self.push_line(MoveKind::Descend, c.extend(z), self.feed);
+            self.push_line(MoveKind::Cut, start.extend(z), self.feed);
+            return;
+        }
         // a longer way in sideways before a plunge
         if let Some(p) = self.lateral_landing(start, z, 4.0 * r) {
             self.land_and_approach(p, start, z);
             return;
         }
         // nothing fits: plunge
-        self.travel(start, top + approach);
-        self.tp.note("plunge: no room for a helix or a ramp");
-        self.push_line(MoveKind::Plunge, start.extend(z), self.entry_feed);
+        self.plunge(start, top, z, "no room for a helix or a ramp");
     }
 
     /// A helix near `start` for a start with no room for one itself (a pass that starts on the
@@ -921,7 +956,7 @@ mod tests {
 
     /// A pocket just wider than the tool each way and a pass too short to ramp along: no
     /// helix, no ramp, no landing beside it. Only then a plunge, at the entry feed, with a note
-    /// in the program.
+    /// in the program; and a later entry beside it at that level goes down that bore again.
     #[test]
     fn a_plunge_only_when_nothing_fits_and_it_is_noted() {
         let p = Pocket::new(4.3, 4.3);
@@ -933,6 +968,21 @@ mod tests {
         let last = l.tp.moves.last().copied().expect("moves");
         assert_eq!((last.kind, last.to, last.feed), (MoveKind::Plunge, start.extend(z), l.entry_feed));
         assert_eq!(count(&l.tp.moves, MoveKind::Entry) + count(&l.tp.moves, MoveKind::Descend), 0);
+        // a second entry at that level 0.1 mm off it (a clean-up contour round the bore): down
+        // the bore again, then sideways; no second plunge
+        l.down_at = None;
+        let other = DVec2::new(2.25, 2.15);
+        l.enter(other, &[other, DVec2::new(2.25, 2.2)], z, 0.01);
+        assert_eq!(count(&l.tp.moves, MoveKind::Plunge), 1);
+        let n = l.tp.moves.len();
+        let (down, side) = (l.tp.moves[n - 2], l.tp.moves[n - 1]);
+        assert_eq!((down.kind, down.to), (MoveKind::Descend, start.extend(z)));
+        assert_eq!((side.kind, side.to), (MoveKind::Cut, other.extend(z)));
+        assert!(noted(&l, "entry down a bore plunged before"), "{:?}", l.tp.notes);
+        // not at another level
+        l.down_at = None;
+        l.enter(other, &[other, DVec2::new(2.25, 2.2)], z + 0.5, 0.01);
+        assert_eq!(count(&l.tp.moves, MoveKind::Plunge), 2);
     }
 
     /// The pocket cleared below y = 7; the tool down at y = 5.3, its edge 0.3 mm into the

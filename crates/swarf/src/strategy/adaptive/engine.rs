@@ -328,9 +328,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
             }
             Start::Plunge { c } => {
                 let top = self.l.top_near(c, self.c.r);
-                self.l.travel(c, top + self.l.link.approach);
-                self.l.tp.note("plunge: no room for a helix and no way in from the side");
-                self.l.push_line(MoveKind::Plunge, c.extend(z), self.l.entry_feed);
+                self.l.plunge(c, top, z, "no room for a helix and no way in from the side");
                 (c, 0.0, Mode::Engage)
             }
         };
