@@ -4,7 +4,7 @@
 //! is down (a short feed move while it leaves the material, then a rapid; a short step through
 //! material as a cut), else a lift to the minimum retract and an entry, the first that fits of a
 //! descent into free or cleared space, a lateral landing, a helix, a ramp, a helix round a
-//! centre nearby and, noted, a plunge;
+//! centre nearby, a bore plunged before and, noted, a plunge;
 //! then the pass, arc-fitted and cut into the model. The walk-through, with a figure, is in
 //! `docs/linking.md`.
 
