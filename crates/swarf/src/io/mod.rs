@@ -364,9 +364,6 @@ pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
         let mut place = ov.placement;
         place.scale *= ov.import.units.map_or(1.0, |u| u.mm());
         mesh.transform(&place);
-        if mesh.bounds().is_none() {
-            return Err(Error::input(path, "file", "the mesh is empty"));
-        }
         let mut sideways = None;
         if ov.placement.rotate_deg == [0.0; 3] {
             match stl::lay_flat(&mesh).filter(|_| ov.lay_flat) {

@@ -93,20 +93,16 @@ pub fn lay_flat(mesh: &Mesh) -> Option<([f64; 3], String)> {
         return None;
     }
     // (+Y down: -90° about X; -Y down: +90°; +X down: +90° about Y; -X down: -90°)
-    let (rot, face) = match (s.axis, down_is_high) {
-        (1, true) => ([-90.0, 0.0, 0.0], "+Y"),
-        (1, false) => ([90.0, 0.0, 0.0], "-Y"),
-        (_, true) => ([0.0, 90.0, 0.0], "+X"),
-        (_, false) => ([0.0, -90.0, 0.0], "-X"),
+    let (facing, face, angle, about) = match (s.axis, down_is_high) {
+        (1, true) => ("Y", "+Y", -90.0, "X"),
+        (1, false) => ("Y", "-Y", 90.0, "X"),
+        (_, true) => ("X", "+X", 90.0, "Y"),
+        (_, false) => ("X", "-X", -90.0, "Y"),
     };
-    let deg = |v: f64| format!("{v:+.0}");
+    let rot = if about == "X" { [angle, 0.0, 0.0] } else { [0.0, angle, 0.0] };
     let what = format!(
-        "laid flat: its flat faces face {} ({:.0} mm² against {:.0} mm² facing Z), the {face} side ({more:.0} mm² of flat face against {less:.0}) is its back: rotated {}° about {} (--part-rotate 0,0,0 keeps it as drawn)",
-        if s.axis == 1 { "Y" } else { "X" },
-        s.side,
-        s.up,
-        deg(if s.axis == 1 { rot[0] } else { rot[1] }),
-        if s.axis == 1 { "X" } else { "Y" },
+        "laid flat: its flat faces face {facing} ({:.0} mm² against {:.0} mm² facing Z), the {face} side ({more:.0} mm² of flat face against {less:.0}) is its back: rotated {angle:+.0}° about {about} (--part-rotate 0,0,0 keeps it as drawn)",
+        s.side, s.up,
     );
     Some((rot, what))
 }

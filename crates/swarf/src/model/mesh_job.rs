@@ -174,12 +174,7 @@ impl MeshJob {
         breaks.extend(flats);
         breaks.sort_by(|a, b| b.total_cmp(a));
         breaks.dedup_by(|a, b| (*b - *a).abs() <= LEVEL_MERGE);
-        let mut zs = Vec::new();
-        for w in breaks.windows(2) {
-            let (a, b) = (w[0], w[1]);
-            let n = (((a - b) / stepdown) - 1e-9).ceil().max(1.0) as usize;
-            zs.extend((1..=n).map(|i| if i == n { b } else { a - (a - b) * i as f64 / n as f64 }));
-        }
+        let mut zs: Vec<f64> = breaks.windows(2).flat_map(|w| even_steps(w[0], w[1], stepdown)).collect();
         if zs.is_empty() {
             zs.push(bottom);
         }
@@ -195,9 +190,7 @@ impl MeshJob {
     pub fn levels_on_grid(&self, depth: f64) -> Vec<f64> {
         let top = self.stock_hi.z;
         let (bottom, flats) = self.bottom_and_flats();
-        let n = (((top - bottom) / depth) - 1e-9).ceil().max(1.0) as usize;
-        let mut zs: Vec<f64> =
-            (1..=n).map(|i| if i == n { bottom } else { top - (top - bottom) * i as f64 / n as f64 }).collect();
+        let mut zs: Vec<f64> = even_steps(top, bottom, depth).collect();
         zs.extend(flats);
         zs.sort_by(|a, b| b.total_cmp(a));
         zs.dedup_by(|a, b| (*b - *a).abs() <= LEVEL_MERGE);
@@ -227,6 +220,13 @@ impl MeshJob {
         j.part_top = self.stock_hi.z;
         j
     }
+}
+
+/// The heights from `a` down to `b` (not `a`, ending exactly at `b`) in the fewest even steps of
+/// at most `step`.
+fn even_steps(a: f64, b: f64, step: f64) -> impl Iterator<Item = f64> {
+    let n = (((a - b) / step) - 1e-9).ceil().max(1.0) as usize;
+    (1..=n).map(move |i| if i == n { b } else { a - (a - b) * i as f64 / n as f64 })
 }
 
 /// The region a level must not enter: the shadow grown by the allowance. The union of

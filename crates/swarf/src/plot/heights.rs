@@ -38,30 +38,39 @@ pub fn png(p: &RestPicture) -> Result<Vec<u8>> {
     }
     let k = p.nx.max(p.ny).div_ceil(p.max_side.max(1));
     let (w, h) = (p.nx.div_ceil(k), p.ny.div_ceil(k));
-    let mut pix = resvg::tiny_skia::Pixmap::new(w as u32, h as u32).ok_or_else(empty)?;
     let span = (p.top - p.bottom).max(1e-9);
-    let data = pix.data_mut();
-    for bj in 0..h {
-        for bi in 0..w {
-            // the block: its mean height, and its thickest rest
-            let (mut sum, mut n, mut t) = (0.0, 0usize, 0.0f64);
-            for j in bj * k..((bj + 1) * k).min(p.ny) {
-                for i in bi * k..((bi + 1) * k).min(p.nx) {
-                    let c = j * p.nx + i;
-                    let s = f64::from(p.stock[c]);
-                    let s = if s.is_finite() { s.clamp(p.bottom, p.top) } else { p.bottom };
-                    sum += s;
-                    n += 1;
-                    if f64::from(p.low[c]) < p.top {
-                        t = t.max(s - f64::from(p.low[c]));
-                    }
+    rgb_png(w, h, |bi, bj| {
+        // the block: its mean height, and its thickest rest
+        let (mut sum, mut n, mut t) = (0.0, 0usize, 0.0f64);
+        for j in bj * k..((bj + 1) * k).min(p.ny) {
+            for i in bi * k..((bi + 1) * k).min(p.nx) {
+                let c = j * p.nx + i;
+                let s = f64::from(p.stock[c]);
+                let s = if s.is_finite() { s.clamp(p.bottom, p.top) } else { p.bottom };
+                sum += s;
+                n += 1;
+                if f64::from(p.low[c]) < p.top {
+                    t = t.max(s - f64::from(p.low[c]));
                 }
             }
-            let v = 60.0 + 180.0 * ((sum / n as f64 - p.bottom) / span).clamp(0.0, 1.0);
-            let a = if t > p.tol { (0.35 + 0.65 * (t / p.full.max(1e-9)).min(1.0)).min(1.0) } else { 0.0 };
-            let (r, g, b) = (v + (255.0 - v) * a, v + (140.0 - v) * a, v * (1.0 - a));
+        }
+        let v = 60.0 + 180.0 * ((sum / n as f64 - p.bottom) / span).clamp(0.0, 1.0);
+        let a = if t > p.tol { (0.35 + 0.65 * (t / p.full.max(1e-9)).min(1.0)).min(1.0) } else { 0.0 };
+        (v + (255.0 - v) * a, v + (140.0 - v) * a, v * (1.0 - a))
+    })
+}
+
+/// A `w` × `h` picture as PNG bytes, the colour of pixel (`i`, `j`) (column, row from the
+/// bottom: the grids' order) from `rgb`, 0–255 each.
+fn rgb_png(w: usize, h: usize, mut rgb: impl FnMut(usize, usize) -> (f64, f64, f64)) -> Result<Vec<u8>> {
+    let mut pix = resvg::tiny_skia::Pixmap::new(w as u32, h as u32)
+        .ok_or_else(|| Error::Output { what: "picture".into(), reason: "it is empty".into() })?;
+    let data = pix.data_mut();
+    for j in 0..h {
+        for i in 0..w {
+            let (r, g, b) = rgb(i, j);
             // image rows top down: y up in the grid
-            let o = ((h - 1 - bj) * w + bi) * 4;
+            let o = ((h - 1 - j) * w + i) * 4;
             data[o] = r.round() as u8;
             data[o + 1] = g.round() as u8;
             data[o + 2] = b.round() as u8;
@@ -86,36 +95,23 @@ pub fn top_view_png(v: &TopView) -> Result<Vec<u8>> {
     if n == 0 || v.height.len() != n || v.terrace.len() != n || v.beyond.len() != n {
         return Err(empty());
     }
-    let mut pix = resvg::tiny_skia::Pixmap::new(v.nx as u32, v.ny as u32).ok_or_else(empty)?;
     let span = (v.top - v.bottom).max(1e-9);
-    let data = pix.data_mut();
-    for j in 0..v.ny {
-        for i in 0..v.nx {
-            let b = j * v.nx + i;
-            let hgt = f64::from(v.height[b]);
-            let (r, g, bl) = if hgt.is_finite() {
-                let g = 60.0 + 180.0 * ((hgt - v.bottom) / span).clamp(0.0, 1.0);
-                let blend = |c: (f64, f64, f64), a: f64| (g + (c.0 - g) * a, g + (c.1 - g) * a, g + (c.2 - g) * a);
-                if v.beyond[b] > 0.0 {
-                    blend((220.0, 20.0, 20.0), (0.5 + f64::from(v.beyond[b])).min(1.0))
-                } else if v.terrace[b] > TERRACE_SHOWN {
-                    blend((245.0, 175.0, 40.0), 0.25 + 0.5 * (f64::from(v.terrace[b]) / 3.0).min(1.0))
-                } else {
-                    (g, g, g)
-                }
-            } else {
-                (255.0, 255.0, 255.0)
-            };
-            // image rows top down: y up in the grid
-            let o = ((v.ny - 1 - j) * v.nx + i) * 4;
-            data[o] = r.round() as u8;
-            data[o + 1] = g.round() as u8;
-            data[o + 2] = bl.round() as u8;
-            data[o + 3] = 255;
+    rgb_png(v.nx, v.ny, |i, j| {
+        let b = j * v.nx + i;
+        let hgt = f64::from(v.height[b]);
+        if !hgt.is_finite() {
+            return (255.0, 255.0, 255.0);
         }
-    }
-    pix.encode_png()
-        .map_err(|e| Error::Output { what: "picture".into(), reason: format!("cannot encode the PNG: {e}") })
+        let g = 60.0 + 180.0 * ((hgt - v.bottom) / span).clamp(0.0, 1.0);
+        let blend = |c: (f64, f64, f64), a: f64| (g + (c.0 - g) * a, g + (c.1 - g) * a, g + (c.2 - g) * a);
+        if v.beyond[b] > 0.0 {
+            blend((220.0, 20.0, 20.0), (0.5 + f64::from(v.beyond[b])).min(1.0))
+        } else if v.terrace[b] > TERRACE_SHOWN {
+            blend((245.0, 175.0, 40.0), 0.25 + 0.5 * (f64::from(v.terrace[b]) / 3.0).min(1.0))
+        } else {
+            (g, g, g)
+        }
+    })
 }
 
 #[cfg(test)]

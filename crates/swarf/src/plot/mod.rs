@@ -152,10 +152,15 @@ fn draw_scene(o: &mut String, part: &Area, f: &Figure, v: &View, stroke: f64) {
             area_path(&fx, &map)
         );
     }
+    draw_stock(o, f, v, stroke);
+}
+
+/// The stock outline in `v`.
+fn draw_stock(o: &mut String, f: &Figure, v: &View, stroke: f64) {
     let _ = writeln!(
         o,
         r##"<path d="{}" fill="none" stroke="#000" stroke-width="{stroke}" fill-rule="evenodd"/>"##,
-        area_path(f.stock, &map)
+        area_path(f.stock, &|p| v.map(p))
     );
 }
 
@@ -270,11 +275,7 @@ pub fn svg(f: &Figure) -> String {
     if let (true, Some(tv)) = (three_d, &f.replay.top_view) {
         // the stock after the program, from above
         draw_top_view(&mut o, tv, &v);
-        let _ = writeln!(
-            o,
-            r##"<path d="{}" fill="none" stroke="#000" stroke-width="1.2" fill-rule="evenodd"/>"##,
-            area_path(f.stock, &|p| v.map(p))
-        );
+        draw_stock(&mut o, f, &v, 1.2);
         draw_marks(&mut o, f, &v, &all);
     } else {
         draw_scene(&mut o, f.part, f, &v, 1.2);
