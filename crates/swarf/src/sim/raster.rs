@@ -250,6 +250,11 @@ pub struct RasterSim {
     circ: Vec<DVec2>,
     /// The same offsets in cells.
     circ_cells: Vec<DVec2>,
+    /// The same offsets as a step in the row-major cell index and the two thresholds on the
+    /// centre's position within its cell that move it one cell on (see [`RingCell`]).
+    circ_index: Vec<RingCell>,
+    /// How far, in cells, the ring reaches from its centre's cell (rounded up, plus one).
+    circ_reach: f64,
     exact: ExactModel,
     /// During a replay, the channel to the thread that holds the exact model (`exact` is then
     /// an empty stand-in).
@@ -370,6 +375,8 @@ impl RasterSim {
             state: st,
             reach,
             circ_cells: circ.iter().map(|o| *o / res).collect(),
+            circ_index: circ.iter().map(|o| RingCell::new(*o / res, grid.nx)).collect(),
+            circ_reach: (rho / res).ceil() + 1.0,
             circ,
             exact,
             feed: FeedSlot::default(),
@@ -895,6 +902,40 @@ impl RasterSim {
         // cells plus the point's offset in cells (no division per point)
         let g = &self.grid;
         let (fx0, fy0) = ((c.x - g.x0) / g.res, (c.y - g.y0) / g.res);
+        let reach = self.circ_reach;
+        if fx0 >= reach && fy0 >= reach && fx0 + reach < g.nx as f64 && fy0 + reach < g.ny as f64 {
+            // the whole ring lies on the grid (nearly always): each point's cell is the
+            // centre's cell plus a fixed step, one on where the centre's place in its cell
+            // passes the point's threshold — no conversion or bounds test per point
+            let (ci, cj) = (fx0 as usize, fy0 as usize);
+            let (fx, fy) = (fx0 - ci as f64, fy0 - cj as f64);
+            let base = (cj * g.nx + ci) as isize;
+            let nx = g.nx as isize;
+            let s = &self.s[..];
+            let mut read = |k: usize| {
+                let rc = &self.circ_index[k];
+                let idx = base + rc.step + (fx >= rc.tx) as isize + if fy >= rc.ty { nx } else { 0 };
+                if s[idx as usize] <= zq || self.circ[k].dot(dir) < 0.0 {
+                    return;
+                }
+                if let Some(p) = &current
+                    && p.distance(c + self.circ[k]) <= self.r
+                {
+                    return;
+                }
+                hit += 1;
+            };
+            // the run lo..=hi of indices modulo n, as one or two ranges
+            let n = n as i64;
+            let (a, b) = if lo < 0 { (lo + n, hi + n) } else { (lo, hi) };
+            if b >= n {
+                (a as usize..n as usize).for_each(&mut read);
+                (0..=(b - n) as usize).for_each(&mut read);
+            } else {
+                (a as usize..=b as usize).for_each(&mut read);
+            }
+            return 360.0 * hit as f64 / self.circ.len() as f64;
+        }
         for k in lo..=hi {
             let k = k.rem_euclid(n as i64) as usize;
             let off = self.circ[k];
@@ -1103,6 +1144,27 @@ impl RasterSim {
             }
         }
         out
+    }
+}
+
+/// A point of the engagement ring as a step on the grid: with the ring's centre in cell
+/// `(ci, cj)` at `(fx, fy)` within it (each in [0, 1)), the point at offset `o` (in cells)
+/// falls in cell `(ci + ⌊o.x⌋ + [fx ≥ tx], cj + ⌊o.y⌋ + [fy ≥ ty])`, since
+/// `⌊ci + fx + o.x⌋ = ci + ⌊o.x⌋ + ⌊fx + frac(o.x)⌋`.
+#[derive(Debug, Clone, Copy)]
+struct RingCell {
+    /// `⌊o.y⌋ · nx + ⌊o.x⌋`.
+    step: isize,
+    /// `1 − frac(o.x)`.
+    tx: f64,
+    /// `1 − frac(o.y)`.
+    ty: f64,
+}
+
+impl RingCell {
+    fn new(o: DVec2, nx: usize) -> Self {
+        let (ix, iy) = (o.x.floor(), o.y.floor());
+        RingCell { step: iy as isize * nx as isize + ix as isize, tx: 1.0 - (o.x - ix), ty: 1.0 - (o.y - iy) }
     }
 }
 
