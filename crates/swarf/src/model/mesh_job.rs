@@ -158,7 +158,7 @@ impl MeshJob {
         let mut bottom = self.floor + self.allowance_floor;
         let flats: Vec<f64> =
             crate::geom::mesh::flats(&self.mesh, 1e-6).into_iter().map(|f| f + self.allowance_floor).collect();
-        if let Some(&f) = flats.iter().filter(|&&f| f >= bottom && f <= bottom + LEVEL_MERGE && f < top).last() {
+        if let Some(&f) = flats.iter().rev().find(|&&f| f >= bottom && f <= bottom + LEVEL_MERGE && f < top) {
             bottom = f;
         }
         let between = flats.into_iter().filter(|&z| z < top - LEVEL_MERGE && z > bottom + LEVEL_MERGE).collect();
