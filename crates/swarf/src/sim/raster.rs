@@ -1294,6 +1294,51 @@ mod tests {
     }
 
     #[test]
+    fn the_pixel_reading_by_cell_steps_reads_the_cells_a_point_falls_in() {
+        // cuts at two depths, so that the ring meets cut, uncut and half-cut cells
+        let mut s = sim();
+        s.cut_step(DVec2::new(-15.0, -4.0), DVec2::new(12.0, 3.0), -2.0);
+        s.cut_step(DVec2::new(-6.0, -15.0), DVec2::new(4.0, 14.0), -1.0);
+        let z = -2.0;
+        let zq = (z + s.eps) as f32;
+        // the reading as eq. 4 defines it: each point ahead of the motion in the cell
+        // `Grid::cell_of` puts it in
+        let by_cells = |s: &RasterSim, c: DVec2, dir: DVec2| {
+            let hit = s
+                .circ
+                .iter()
+                .filter(|o| o.dot(dir) >= 0.0)
+                .filter(|o| s.grid.cell_of(c + **o).is_some_and(|(i, j)| s.s[j * s.grid.nx + i] > zq))
+                .count();
+            360.0 * hit as f64 / s.circ.len() as f64
+        };
+        // a seeded walk over the stock, off its edges too (where the ring leaves the grid and
+        // the reading takes the general way), every direction
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut inside, mut engaged) = (0, 0);
+        for _ in 0..4000 {
+            let c = DVec2::new(-26.0 + 52.0 * next(), -26.0 + 52.0 * next());
+            let a = std::f64::consts::TAU * next();
+            let dir = DVec2::new(a.cos(), a.sin());
+            let e = s.engagement_pixel(c, z, dir, None);
+            assert_eq!(e, by_cells(&s, c, dir), "at {c:?} along {dir:?}");
+            let (fx, fy) = ((c.x - s.grid.x0) / s.grid.res, (c.y - s.grid.y0) / s.grid.res);
+            let r = s.circ_reach;
+            inside += usize::from(fx >= r && fy >= r && fx + r < s.grid.nx as f64 && fy + r < s.grid.ny as f64);
+            engaged += usize::from(e > 0.0 && e < 180.0);
+        }
+        // (both ways were taken, and the readings were not all 0 or 180)
+        assert!(inside > 1000 && inside < 3900, "{inside} of 4000 on the grid");
+        assert!(engaged > 200, "{engaged} partly engaged");
+    }
+
+    #[test]
     fn a_speck_between_two_sweeps_keeps_rapids_out() {
         let job = Job {
             floor: -5.0,
