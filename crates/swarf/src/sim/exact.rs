@@ -111,6 +111,16 @@ impl Prim {
     }
 }
 
+/// Which of a move's anchors (sample indices, ascending) top a peak of the pixel readings:
+/// an anchor whose reading stands more than [`GUIDE_SMOOTH_DEG`] above the anchors on both
+/// sides of it. The pixels round a corner's peak off and the exact peak may lie a sample or
+/// two beside such an anchor, so [`ExactModel::engagements_guided`] measures both stretches
+/// beside it exactly.
+fn peak_anchors(pixel: &[f32], anchors: &[usize]) -> Vec<bool> {
+    let above = |k: usize, j: usize| pixel[anchors[k]] as f64 > pixel[anchors[j]] as f64 + GUIDE_SMOOTH_DEG;
+    (0..anchors.len()).map(|k| k > 0 && k + 1 < anchors.len() && above(k, k - 1) && above(k, k + 1)).collect()
+}
+
 /// Cleared geometry of the job so far, for exact engagement queries.
 #[derive(Debug, Clone)]
 pub struct ExactModel {
@@ -314,9 +324,11 @@ impl ExactModel {
     /// readings stay within [`GUIDE_SMOOTH_DEG`] of the line between the anchors' readings and
     /// each anchor's reading is within [`GUIDE_AGREE_DEG`] of its exact value: the engagement
     /// then changes smoothly there, as the pixel ring sees it, and the pixels agree with the
-    /// geometry at both ends. `pixel[i]` is the pixel reading of `queries[i]`; `starts` are the
-    /// indices of the first query of each move, ascending. The answers do not depend on the
-    /// number of threads.
+    /// geometry at both ends — and neither anchor tops a peak of the readings
+    /// ([`peak_anchors`]: a program of boss_with_clamp read 88.7° at such an anchor where the
+    /// sample after it reads 90.5°). `pixel[i]` is the pixel reading of `queries[i]`; `starts`
+    /// are the indices of the first query of each move, ascending. The answers do not depend
+    /// on the number of threads.
     pub fn engagements_guided(&self, queries: &[Query], pixel: &[f32], starts: &[usize], stride: usize) -> Vec<f64> {
         assert_eq!(queries.len(), pixel.len(), "a pixel reading per query");
         let stride = stride.max(1);
@@ -346,10 +358,15 @@ impl ExactModel {
         let mut second: Vec<usize> = Vec::new();
         let mut lines: Vec<(usize, usize)> = Vec::new();
         for &(a, b) in &ends {
+            let anchors: Vec<usize> = (a..b).filter(|&i| anchor[i]).collect();
+            let peaks = peak_anchors(pixel, &anchors);
+            let at_peak = |i: usize| anchors.binary_search(&i).is_ok_and(|k| peaks[k]);
             let mut lo = a;
             while lo + 1 < b {
                 let hi = (lo + stride).min(b - 1);
-                if hi > lo + 1 {
+                if hi > lo + 1 && (at_peak(lo) || at_peak(hi)) {
+                    second.extend(lo + 1..hi);
+                } else if hi > lo + 1 {
                     let (pa, pb) = (pixel[lo] as f64, pixel[hi] as f64);
                     let span = (hi - lo) as f64;
                     let smooth = (lo + 1..hi).all(|i| {
@@ -693,6 +710,22 @@ fn covered_intervals(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_anchor_above_the_anchors_on_both_sides_tops_a_peak() {
+        // the readings of a move round a corner (every fourth sample an anchor): a tent whose
+        // top is the anchor at 8, as boss_with_clamp's program read it
+        let pixel = [60.4, 60.4, 72.0, 73.3, 78.4, 79.7, 84.9, 87.4, 90.0, 87.4, 82.3, 78.4, 61.7, 59.1, 59.1];
+        let anchors = [0, 4, 8, 12, 14];
+        assert_eq!(peak_anchors(&pixel, &anchors), [false, false, true, false, false]);
+        // a ramp has no peak, nor does a top only 3° above one side, nor the ends of a move
+        let ramp = [10.0, 20.0, 30.0, 40.0, 50.0];
+        assert_eq!(peak_anchors(&ramp, &[0, 2, 4]), [false, false, false]);
+        let shoulder = [50.0, 52.0, 53.0, 52.0, 40.0];
+        assert_eq!(peak_anchors(&shoulder, &[0, 2, 4]), [false, false, false]);
+        let ends = [90.0, 50.0, 90.0];
+        assert_eq!(peak_anchors(&ends, &[0, 1, 2]), [false, false, false]);
+    }
     use crate::geom::DVec3;
 
     fn model(r: f64) -> ExactModel {
