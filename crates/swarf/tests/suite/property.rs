@@ -525,7 +525,7 @@ fn run(case: &Case) -> (Vec<String>, String) {
         }
     }
     let summary = format!(
-        "seed {:>5} {:7} {:.1}s (plan {:.1}s, sim {:.1}s): {} | {} | moves {} rest {:.5} plunges {} entries {} TEA ref {:.0}° p99 {:.0}° max {:.0}°{}",
+        "seed {:>5} {:7} {:.1}s (plan {:.1}s, sim {:.1}s): {} | {} | moves {} rest {:.5} plunges {} entries {} time {:.3} min TEA ref {:.0}° p99 {:.0}° max {:.0}°{}",
         case.seed,
         case.strategy.name(),
         t.elapsed().as_secs_f64(),
@@ -537,6 +537,7 @@ fn run(case: &Case) -> (Vec<String>, String) {
         r.rest_fraction,
         r.plunges,
         r.entries,
+        r.time_min,
         r.engagement_ref_deg,
         r.engagement_deg.p99,
         r.engagement_deg.max,
