@@ -710,6 +710,7 @@ fn covered_intervals(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geom::DVec3;
 
     #[test]
     fn an_anchor_above_the_anchors_on_both_sides_tops_a_peak() {
@@ -726,7 +727,6 @@ mod tests {
         let ends = [90.0, 50.0, 90.0];
         assert_eq!(peak_anchors(&ends, &[0, 1, 2]), [false, false, false]);
     }
-    use crate::geom::DVec3;
 
     fn model(r: f64) -> ExactModel {
         let stock = vec![
