@@ -489,9 +489,7 @@ impl<'a, M: Material> Linker<'a, M> {
             return;
         }
         // helix around the start
-        let kd = self.sim.keep_distance(&Path::Line { a: start.extend(z), b: start.extend(z) }, 10.0 * r);
-        let room = kd - r - self.link.arc_tol - 0.005;
-        let rh = (self.link.helix_radius_frac * r).min(room);
+        let rh = self.helix_room(start);
         if rh >= self.link.helix_min_frac * r {
             let top_h = self.top_near(start, r + rh + 0.05).max(z);
             self.helix(start, rh, top_h + approach, z, pts);
@@ -541,6 +539,14 @@ impl<'a, M: Material> Linker<'a, M> {
         self.plunge(start, top, z, "no room for a helix or a ramp");
     }
 
+    /// The largest helix radius round `c` that keeps the tool off the part (the arc tolerance
+    /// and 5 µm to spare), at most the one the options want (negative where the tool itself
+    /// does not fit).
+    fn helix_room(&self, c: DVec2) -> f64 {
+        let kd = self.sim.keep_distance(&Path::Line { a: c.extend(0.0), b: c.extend(0.0) }, 10.0 * self.r);
+        (self.link.helix_radius_frac * self.r).min(kd - self.r - self.link.arc_tol - 0.005)
+    }
+
     /// A helix near `start` for a start with no room for one itself (a pass that starts on the
     /// wall of a bore just wider than the tool): a centre with room for a helix of at least the
     /// smallest radius, whose circle holds `start` or passes within a tenth of that radius
@@ -559,8 +565,7 @@ impl<'a, M: Material> Linker<'a, M> {
         });
         let mut best: Option<(DVec2, f64)> = None;
         for c in std::iter::once(centroid).chain(around) {
-            let kd = self.sim.keep_distance(&Path::Line { a: c.extend(0.0), b: c.extend(0.0) }, 10.0 * r);
-            let rh = (kd - r - self.link.arc_tol - 0.005).min(hi);
+            let rh = self.helix_room(c);
             let off = (start - c).length();
             if rh >= lo && off <= rh + 0.1 * lo && best.is_none_or(|b| rh > b.1 + 1e-9) {
                 best = Some((c, rh));
