@@ -887,7 +887,6 @@ impl RasterSim {
     /// ([`Self::engagement_exact`]) has no such error and is what the report judges by.
     pub fn engagement_pixel(&self, c: DVec2, z: f64, dir: DVec2, current: Option<&Path>) -> f64 {
         let zq = (z + self.eps) as f32;
-        let mut hit = 0usize;
         let current = current.map(Fast::new);
         // the points ahead: those within a quarter turn of the direction (the points stand
         // at angles τ(k + ½)/n, so they are one run of indices, read with a point to spare at
@@ -898,12 +897,16 @@ impl RasterSim {
         let quarter = 0.25 * n as f64;
         let (lo, hi) = ((mid - quarter).floor() as i64 - 1, (mid + quarter).ceil() as i64 + 1);
         let (lo, hi) = if hi - lo + 1 >= n as i64 { (0, n as i64 - 1) } else { (lo, hi) };
+        // the run lo..=hi of indices modulo n, as one or two ranges
+        let n = n as i64;
+        let (a, b) = if lo < 0 { (lo + n, hi + n) } else { (lo, hi) };
+        let run = if b >= n { [a..n, 0..b - n + 1] } else { [a..b + 1, 0..0] };
         // the cell of a point, as `Grid::cell_of` finds it, from the centre's position in
         // cells plus the point's offset in cells (no division per point)
         let g = &self.grid;
         let (fx0, fy0) = ((c.x - g.x0) / g.res, (c.y - g.y0) / g.res);
         let reach = self.circ_reach;
-        if fx0 >= reach && fy0 >= reach && fx0 + reach < g.nx as f64 && fy0 + reach < g.ny as f64 {
+        let hit = if fx0 >= reach && fy0 >= reach && fx0 + reach < g.nx as f64 && fy0 + reach < g.ny as f64 {
             // the whole ring lies on the grid (nearly always): each point's cell is the
             // centre's cell plus a fixed step, one on where the centre's place in its cell
             // passes the point's threshold — no conversion or bounds test per point
@@ -911,53 +914,42 @@ impl RasterSim {
             let (fx, fy) = (fx0 - ci as f64, fy0 - cj as f64);
             let base = (cj * g.nx + ci) as isize;
             let nx = g.nx as isize;
-            let s = &self.s[..];
-            let mut read = |k: usize| {
+            self.ring_hits(&run, c, dir, zq, current.as_ref(), |k| {
                 let rc = &self.circ_index[k];
-                let idx = base + rc.step + (fx >= rc.tx) as isize + if fy >= rc.ty { nx } else { 0 };
-                if s[idx as usize] <= zq || self.circ[k].dot(dir) < 0.0 {
-                    return;
-                }
-                if let Some(p) = &current
-                    && p.distance(c + self.circ[k]) <= self.r
-                {
-                    return;
-                }
-                hit += 1;
-            };
-            // the run lo..=hi of indices modulo n, as one or two ranges
-            let n = n as i64;
-            let (a, b) = if lo < 0 { (lo + n, hi + n) } else { (lo, hi) };
-            if b >= n {
-                (a as usize..n as usize).for_each(&mut read);
-                (0..=(b - n) as usize).for_each(&mut read);
-            } else {
-                (a as usize..=b as usize).for_each(&mut read);
-            }
-            return 360.0 * hit as f64 / self.circ.len() as f64;
-        }
-        for k in lo..=hi {
-            let k = k.rem_euclid(n as i64) as usize;
-            let off = self.circ[k];
-            if off.dot(dir) < 0.0 {
-                continue;
-            }
-            let (fx, fy) = (fx0 + self.circ_cells[k].x, fy0 + self.circ_cells[k].y);
-            if !(fx >= 0.0 && fy >= 0.0) {
-                continue;
-            }
-            let (i, j) = (fx as usize, fy as usize);
-            if i >= g.nx || j >= g.ny || self.s[j * g.nx + i] <= zq {
-                continue;
-            }
-            if let Some(p) = &current
-                && p.distance(c + off) <= self.r
-            {
-                continue;
-            }
-            hit += 1;
-        }
+                Some((base + rc.step + (fx >= rc.tx) as isize + if fy >= rc.ty { nx } else { 0 }) as usize)
+            })
+        } else {
+            self.ring_hits(&run, c, dir, zq, current.as_ref(), |k| {
+                let (fx, fy) = (fx0 + self.circ_cells[k].x, fy0 + self.circ_cells[k].y);
+                let (i, j) = (fx as usize, fy as usize);
+                (fx >= 0.0 && fy >= 0.0 && i < g.nx && j < g.ny).then(|| j * g.nx + i)
+            })
+        };
         360.0 * hit as f64 / self.circ.len() as f64
+    }
+
+    /// The points of the engagement ring in `run` (indices) that count for
+    /// [`Self::engagement_pixel`] at `c` moving along `dir`: their cell (`cell(k)`, none off the
+    /// grid) holds material above `zq`, they lie ahead of the motion, and the current move
+    /// (`current`) has not swept them.
+    fn ring_hits(
+        &self,
+        run: &[std::ops::Range<i64>; 2],
+        c: DVec2,
+        dir: DVec2,
+        zq: f32,
+        current: Option<&Fast>,
+        cell: impl Fn(usize) -> Option<usize>,
+    ) -> usize {
+        let mut hit = 0;
+        for k in run.iter().flat_map(|r| r.start as usize..r.end as usize) {
+            hit += usize::from(
+                cell(k).is_some_and(|i| self.s[i] > zq)
+                    && self.circ[k].dot(dir) >= 0.0
+                    && current.is_none_or(|p| p.distance(c + self.circ[k]) > self.r),
+            );
+        }
+        hit
     }
 
     /// Exact engagement (see [`ExactModel`]).
