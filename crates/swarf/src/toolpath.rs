@@ -184,6 +184,10 @@ pub struct Totals {
     pub retracts: usize,
 }
 
+/// Arcs of a larger radius, mm, are written as lines by [`Toolpath::quantize`] where they are
+/// straight to within half the coordinates' step.
+pub const STRAIGHT_ARC_RADIUS: f64 = 10_000.0;
+
 impl Toolpath {
     /// An empty program for `tool` starting at `start`.
     pub fn new(tool: Tool, start: DVec3, clearance_z: f64) -> Self {
@@ -292,8 +296,10 @@ impl Toolpath {
     /// Rounds every end point to a grid of `step` mm (what the post will print) and moves each
     /// arc centre onto the perpendicular bisector of its rounded chord, rounded to `center_step`,
     /// so that the start and end radii of every printed arc agree to about `center_step`
-    /// (controllers reject arcs whose radii differ, and simulators misread them). After this the
-    /// simulation replays exactly the program that is written.
+    /// (controllers reject arcs whose radii differ, and simulators misread them). An arc of more
+    /// than [`STRAIGHT_ARC_RADIUS`] whose middle lies less than half a `step` off its chord is a
+    /// line: its centre would be a word of many digits for a curve no one can print. After this
+    /// the simulation replays exactly the program that is written.
     pub fn quantize(&mut self, step: f64, center_step: f64) {
         let q = |v: f64, s: f64| {
             let r = (v / s).round() * s;
@@ -316,7 +322,14 @@ impl Toolpath {
                     center
                 };
                 let c = DVec2::new(q(c.x - a.x, center_step) + a.x, q(c.y - a.y, center_step) + a.y);
-                m.motion = Motion::Arc { center: c, ccw };
+                let r = (a - c).length();
+                let half = chord.length() / 2.0;
+                let sagitta = r - (r * r - half * half).max(0.0).sqrt();
+                m.motion = if r > STRAIGHT_ARC_RADIUS && sagitta < step / 2.0 && chord.length_squared() > 1e-18 {
+                    Motion::Line
+                } else {
+                    Motion::Arc { center: c, ccw }
+                };
             }
             m.to = to;
             from = to;
