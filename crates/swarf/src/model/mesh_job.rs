@@ -5,6 +5,7 @@ use super::{Cutting, Job, REGION_TOL};
 use crate::error::{Error, Result, Setting};
 use crate::geom::mesh::Mesh;
 use crate::geom::{Area, DVec3};
+use crate::limits;
 
 /// A 3-axis roughing job on a mesh part.
 #[derive(Debug, Clone)]
@@ -82,6 +83,37 @@ impl MeshJob {
         if !(size.x > 0.0 && size.y > 0.0 && size.z > 0.0 && size.is_finite()) {
             return Err(Error::setting(Setting::StockBox, "the box must have positive width, length and height"));
         }
+        let inside = |lo: DVec3, hi: DVec3| lo.to_array().into_iter().chain(hi.to_array()).all(limits::coord_ok);
+        if !inside(self.stock_lo, self.stock_hi) {
+            return Err(Error::setting(
+                Setting::StockBox,
+                format!(
+                    "{} to {} mm: every coordinate must be within ±{} mm",
+                    self.stock_lo,
+                    self.stock_hi,
+                    limits::MAX_COORD_MM
+                ),
+            ));
+        }
+        match self.mesh.bounds() {
+            Some((lo, hi)) if inside(lo, hi) => {}
+            Some((lo, hi)) => {
+                return Err(Error::job(
+                    "part",
+                    format!(
+                        "the mesh reaches from ({:.6e}, {:.6e}, {:.6e}) to ({:.6e}, {:.6e}, {:.6e}) mm: every coordinate must be within ±{} mm (is the unit or the scale right?)",
+                        lo.x,
+                        lo.y,
+                        lo.z,
+                        hi.x,
+                        hi.y,
+                        hi.z,
+                        limits::MAX_COORD_MM
+                    ),
+                ));
+            }
+            None => return Err(Error::job("part", "the mesh is empty")),
+        }
         if !(self.floor.is_finite() && self.floor + self.allowance_floor < self.stock_hi.z) {
             return Err(Error::setting(
                 Setting::Floor,
@@ -95,6 +127,26 @@ impl MeshJob {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(Error::setting(setting, format!("{v} mm: must be zero or positive")));
             }
+        }
+        let mut levels = limits::level_count(self.stock_hi.z - (self.floor + self.allowance_floor), self.stepdown);
+        if levels <= limits::MAX_LEVELS as f64 {
+            // (with the part's flats, each a level of its own)
+            let (_, flats) = self.bottom_and_flats();
+            levels = self.levels().len() as f64;
+            if levels > limits::MAX_LEVELS as f64 {
+                return Err(Error::job(
+                    "part",
+                    format!(
+                        "{levels:.0} levels, {} of them at the part's flat faces: at most {} (is it a terraced or noisy mesh?)",
+                        flats.len(),
+                        limits::MAX_LEVELS
+                    ),
+                ));
+            }
+        }
+        if let Some(why) = limits::work_refusal(levels, size.x * size.y, self.cutting.stepover_mm()) {
+            let setting = if levels > limits::MAX_LEVELS as f64 { Setting::Stepdown } else { Setting::ToolDiameter };
+            return Err(Error::setting(setting, why));
         }
         Ok(())
     }
@@ -190,11 +242,19 @@ impl MeshJob {
     pub fn levels_on_grid(&self, depth: f64) -> Vec<f64> {
         let top = self.stock_hi.z;
         let (bottom, flats) = self.bottom_and_flats();
-        let mut zs: Vec<f64> = even_steps(top, bottom, depth).collect();
-        zs.extend(flats);
-        zs.sort_by(|a, b| b.total_cmp(a));
-        zs.dedup_by(|a, b| (*b - *a).abs() <= LEVEL_MERGE);
-        zs
+        // (a grid level and a flat closer than LEVEL_MERGE are one level at the flat: at the
+        // grid's height it would leave a skin on the flat)
+        let mut zs: Vec<(f64, bool)> = even_steps(top, bottom, depth).map(|z| (z, z == bottom)).collect();
+        zs.extend(flats.into_iter().map(|z| (z, true)));
+        zs.sort_by(|a, b| b.0.total_cmp(&a.0));
+        zs.dedup_by(|lower, upper| {
+            let close = (upper.0 - lower.0).abs() <= LEVEL_MERGE;
+            if close && lower.1 && !upper.1 {
+                *upper = *lower;
+            }
+            close
+        });
+        zs.into_iter().map(|(z, _)| z).collect()
     }
 
     /// The 2.5D job of one level: the stock box, the part's shadow above it as the part.
@@ -299,5 +359,40 @@ mod tests {
         let want = [35.0, 35.0 - (35.0 - 1e-9) / 2.0, 1e-9];
         assert_eq!(j.levels(), want.to_vec());
         assert_eq!(*j.levels_on_grid(10.0).last().unwrap(), 1e-9);
+    }
+
+    #[test]
+    fn every_flat_and_the_floor_are_cut_at_their_height_for_any_step_down() {
+        // stock top 18.03, a flat at 10 and the floor at 0: a tool's grid of 2.004 has a level
+        // at 10.014, which once stood for the flat and left a 0.014 mm skin on it
+        let mut j = job(&[10.0], 2.004);
+        j.stock_hi.z = 18.03;
+        for zs in [j.levels(), j.levels_on_grid(2.004)] {
+            assert!(zs.contains(&10.0) && zs.last() == Some(&0.0), "{zs:?}");
+            assert!(!zs.iter().any(|&z| z > 10.0 && z - 10.0 <= LEVEL_MERGE), "{zs:?}");
+        }
+        // seeded random tops, step-downs and flats at least two merge widths apart
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut rnd = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..500 {
+            let top = 5.0 + 45.0 * rnd();
+            let mut flats: Vec<f64> = (0..4).map(|_| 0.1 + (top - 0.2) * rnd()).collect();
+            flats.sort_by(|a, b| b.total_cmp(a));
+            flats.dedup_by(|a, b| *b - *a < 3.0 * LEVEL_MERGE);
+            let step = 0.05 + 5.0 * rnd();
+            let mut j = job(&flats, step);
+            j.stock_hi.z = top;
+            for zs in [j.levels(), j.levels_on_grid(step)] {
+                assert_eq!(zs.last(), Some(&0.0), "top {top} step {step} flats {flats:?}: {zs:?}");
+                for f in flats.iter().filter(|&&f| f < top - LEVEL_MERGE) {
+                    assert!(zs.contains(f), "top {top} step {step} flat {f}: {zs:?}");
+                }
+            }
+        }
     }
 }
