@@ -10,9 +10,10 @@ use anyhow::Context;
 use clap::builder::PossibleValuesParser;
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
-use std::io::{IsTerminal, Write};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use swarf::io::output::{self, OutputFile};
 use swarf::io::{Input, Overrides};
 use swarf::job::rough::{RoughOptions, RoughResult, Stage};
 use swarf::job::toolseq::{Decomposition, SeqOptions};
@@ -395,6 +396,7 @@ fn flag(s: Setting) -> Option<&'static str> {
         Setting::Resolution => "--res",
         Setting::SimEngine => "--sim",
         Setting::OscillatorStepover => "--spiral",
+        Setting::ShapeLevels => "--levels",
         Setting::RapidRate
         | Setting::Floor
         | Setting::StockTop
@@ -503,6 +505,23 @@ impl From<anyhow::Error> for Failure {
     }
 }
 
+/// SIGINT, SIGTERM and SIGHUP end the run with no temporary file left behind and the outputs
+/// either all written or none (`output::interrupt` waits for a renaming in progress), with the
+/// shell's exit status for a signal, 128 + its number.
+fn stop_cleanly_on_signals() {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(sig) = signals.forever().next() {
+            output::interrupt();
+            eprintln!("swarf: stopped by signal {sig}");
+            std::process::exit(128 + sig);
+        }
+    });
+}
+
 fn main() -> ExitCode {
     let cli = match command().try_get_matches().and_then(|m| Cli::from_arg_matches(&m)) {
         Ok(c) => c,
@@ -543,6 +562,7 @@ fn main() -> ExitCode {
         });
     }
     logger.init();
+    stop_cleanly_on_signals();
     let res = match cli.cmd {
         Cmd::Rough(a) => rough(a),
         Cmd::Plan(a) => plan(a),
@@ -741,51 +761,25 @@ fn with_bar(
     Ok(res?)
 }
 
-/// A temporary file beside `path`.
-fn temp_for(path: &Path) -> PathBuf {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
-    dir.join(format!(".{name}.swarf-tmp-{}", std::process::id()))
-}
-
-/// Writes every file through a temporary file beside it and renames them only once all are
-/// written, so that a failure leaves neither a half-written file nor a missing one: existing
-/// outputs stay as they were.
-fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> anyhow::Result<()> {
-    let mut temps: Vec<PathBuf> = Vec::new();
-    let res = (|| -> anyhow::Result<()> {
-        for (path, bytes) in files {
-            let tmp = temp_for(path);
-            let mut f = std::fs::File::create(&tmp).with_context(|| format!("{}: cannot create", path.display()))?;
-            temps.push(tmp);
-            f.write_all(bytes).with_context(|| format!("{}: cannot write", path.display()))?;
-            f.sync_all().ok();
-        }
-        Ok(())
-    })();
-    if let Err(e) = res {
-        for t in &temps {
-            let _ = std::fs::remove_file(t);
-        }
-        return Err(e);
-    }
-    for ((path, _), tmp) in files.iter().zip(&temps) {
-        if let Err(e) = std::fs::rename(tmp, path) {
-            for t in &temps {
-                let _ = std::fs::remove_file(t);
-            }
-            return Err(anyhow::anyhow!("{}: cannot write: {e}", path.display()));
-        }
-    }
-    Ok(())
-}
-
 struct Outputs {
     gcode: PathBuf,
     report: Option<PathBuf>,
     samples: Option<PathBuf>,
     plot_svg: Option<PathBuf>,
     plot_png: Option<PathBuf>,
+    /// The files the run read: no output may replace one.
+    inputs: Vec<PathBuf>,
+}
+
+impl Outputs {
+    fn paths(&self) -> Vec<&Path> {
+        let opt = [&self.report, &self.samples, &self.plot_svg, &self.plot_png];
+        std::iter::once(self.gcode.as_path()).chain(opt.into_iter().flatten().map(PathBuf::as_path)).collect()
+    }
+
+    fn inputs(&self) -> Vec<&Path> {
+        self.inputs.iter().map(PathBuf::as_path).collect()
+    }
 }
 
 /// What the picture draws under the path.
@@ -809,13 +803,20 @@ impl Scene {
 }
 
 /// `scene` is drawn under the path, and only asked for when there is a picture to draw.
-fn write_outputs(scene: impl FnOnce() -> Scene, res: &RoughResult, out: &Outputs) -> Result<(), Failure> {
+fn write_outputs(
+    scene: impl FnOnce() -> Scene,
+    res: &RoughResult,
+    out: &Outputs,
+    extra: Vec<OutputFile>,
+) -> Result<(), Failure> {
+    // (refused before the pictures are drawn)
+    output::check(&out.paths(), &out.inputs())?;
     // render everything first, then write: no output on failure
-    let mut files: Vec<(PathBuf, Vec<u8>)> = vec![(out.gcode.clone(), res.gcode.clone().into_bytes())];
+    let mut files = vec![OutputFile::new(&out.gcode, res.gcode.clone())];
     if let Some(p) = &out.report {
         let json =
             serde_json::to_string_pretty(&res.report).map_err(|e| Failure { user: false, msg: e.to_string() })?;
-        files.push((p.clone(), (json + "\n").into_bytes()));
+        files.push(OutputFile::new(p, json + "\n"));
     }
     if let Some(p) = &out.samples {
         let Some(replay) = &res.replay else {
@@ -844,7 +845,7 @@ fn write_outputs(scene: impl FnOnce() -> Scene, res: &RoughResult, out: &Outputs
                 sm.mi
             ));
         }
-        files.push((p.clone(), csv.into_bytes()));
+        files.push(OutputFile::new(p, csv));
     }
     if out.plot_svg.is_some() || out.plot_png.is_some() {
         let Some(replay) = &res.replay else {
@@ -875,13 +876,14 @@ fn write_outputs(scene: impl FnOnce() -> Scene, res: &RoughResult, out: &Outputs
         };
         let svg = swarf::plot::svg(&fig);
         if let Some(p) = &out.plot_png {
-            files.push((p.clone(), swarf::plot::png(&svg)?));
+            files.push(OutputFile::new(p, swarf::plot::png(&svg)?));
         }
         if let Some(p) = &out.plot_svg {
-            files.push((p.clone(), svg.into_bytes()));
+            files.push(OutputFile::new(p, svg));
         }
     }
-    write_all_atomic(&files)?;
+    files.extend(extra);
+    output::commit(&files, &out.inputs())?;
     Ok(())
 }
 
@@ -925,12 +927,6 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
     let (input, reading) = swarf::io::read_input(&a.input, &overrides(&a.opts)?)?;
     let name = a.input.file_name().and_then(|s| s.to_str()).unwrap_or("input").to_string();
     let opts = options(&a.opts, name)?;
-    if !a.opts.quiet {
-        eprintln!("{}", reading.line(&input));
-        for w in &reading.warnings {
-            eprintln!("swarf: warning: {w}");
-        }
-    }
     let stem = match &input {
         Input::Flat(j) => j.name.clone(),
         Input::Mesh(j) => j.name.clone(),
@@ -944,6 +940,22 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
             _ => (Some(p.with_extension("svg")), Some(p.with_extension("png"))),
         },
     };
+    let out = Outputs {
+        gcode,
+        report: a.report.clone(),
+        samples: a.samples.clone(),
+        plot_svg,
+        plot_png,
+        inputs: reading.files.clone(),
+    };
+    // (refused before the work, not after it)
+    output::check(&out.paths(), &out.inputs())?;
+    if !a.opts.quiet {
+        eprintln!("{}", reading.line(&input));
+        for w in &reading.warnings {
+            eprintln!("swarf: warning: {w}");
+        }
+    }
     let res = match &input {
         Input::Flat(job) => run(job, &opts, a.opts.quiet)?,
         Input::Mesh(job) => with_bar(a.opts.quiet, |p| swarf::job::zlevel::rough(job, &opts, p))?,
@@ -952,11 +964,7 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
         Input::Flat(job) => Scene::of(job),
         Input::Mesh(job) => Scene::of_mesh(job, &res.report.levels),
     };
-    write_outputs(
-        scene,
-        &res,
-        &Outputs { gcode, report: a.report.clone(), samples: a.samples.clone(), plot_svg, plot_png },
-    )?;
+    write_outputs(scene, &res, &out, Vec::new())?;
     if !a.opts.quiet {
         eprintln!("{}", summary(&res.report));
     }
@@ -978,10 +986,11 @@ fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
         samples: None,
         plot_svg: Some(dir.join("demo.svg")),
         plot_png: Some(dir.join("demo.png")),
+        inputs: Vec::new(),
     };
-    write_outputs(|| Scene::of(&job), &res, &out)?;
-    std::fs::write(dir.join("demo_pocket.json"), include_str!("../../swarf/examples_data/demo_pocket.json"))
-        .with_context(|| format!("{}: cannot write", dir.display()))?;
+    let case =
+        OutputFile::new(dir.join("demo_pocket.json"), include_str!("../../swarf/examples_data/demo_pocket.json"));
+    write_outputs(|| Scene::of(&job), &res, &out, vec![case])?;
     if !o.quiet {
         eprintln!("{}", summary(&res.report));
         eprintln!(
@@ -993,13 +1002,18 @@ fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
 }
 
 fn plan(a: PlanArgs) -> Result<(), Failure> {
-    let input = swarf::io::load_input(&a.input, &placement(&a.place)?)?;
+    let (input, reading) = swarf::io::read_input(&a.input, &placement(&a.place)?)?;
     let Input::Mesh(job) = input else {
         return Err(
             swarf::Error::input(&a.input, "file", "plan needs a 3D job: a case with part_stl, or an STL part").into()
         );
     };
     let db = swarf::model::tooldb::ToolDb::read(&a.tools)?;
+    let mut inputs: Vec<&Path> = reading.files.iter().map(PathBuf::as_path).collect();
+    inputs.push(&a.tools);
+    let report_path = a.report.clone().unwrap_or_else(|| a.output_dir.join("plan.json"));
+    // (the report refused before the work; the programs, named after the plan, when written)
+    output::check(&[&report_path], &inputs)?;
     let d = SeqOptions::DEFAULT;
     let opts = SeqOptions {
         decomposition: match a.decomposition {
@@ -1020,7 +1034,7 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
     let post = post_of(&a.post);
     let best = sp.best();
     let input_name = a.input.file_name().and_then(|s| s.to_str()).unwrap_or("input").to_string();
-    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+    let mut files: Vec<OutputFile> = Vec::new();
     let mut programs = Vec::new();
     for (i, p) in sp.programs.iter().enumerate() {
         let stem = format!("{:02}_{}_D{}", i + 1, file_safe(&p.spec.id), swarf::post::num(p.spec.diameter, 3));
@@ -1056,9 +1070,9 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
             ],
             spindle_rpm: p.spec.spindle_rpm(),
         };
-        let gcode = swarf::post::write(&tp, post, &header);
+        let gcode = swarf::post::write(&tp, post, &header)?;
         let name = format!("{stem}.ngc");
-        files.push((a.output_dir.join(&name), gcode.into_bytes()));
+        files.push(OutputFile::new(a.output_dir.join(&name), gcode));
         let mut entry = serde_json::json!({
             "file": name,
             "tool": p.spec.id,
@@ -1084,7 +1098,7 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
         }
         if let (Some(rest), false) = (&sp.rest, a.no_pictures) {
             let pname = format!("{stem}_rest.png");
-            files.push((a.output_dir.join(&pname), rest.png(i)?));
+            files.push(OutputFile::new(a.output_dir.join(&pname), rest.png(i)?));
             entry["rest_picture"] = serde_json::Value::String(pname);
         }
         programs.push(entry);
@@ -1117,11 +1131,10 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
         "sequences": sp.sequences,
     });
     let json = serde_json::to_string_pretty(&report).map_err(|e| Failure { user: false, msg: e.to_string() })?;
-    let report_path = a.report.clone().unwrap_or_else(|| a.output_dir.join("plan.json"));
-    files.push((report_path.clone(), (json + "\n").into_bytes()));
+    files.push(OutputFile::new(&report_path, json + "\n"));
     std::fs::create_dir_all(&a.output_dir)
         .with_context(|| format!("{}: cannot create the folder", a.output_dir.display()))?;
-    write_all_atomic(&files)?;
+    output::commit(&files, &inputs)?;
     if !a.quiet {
         println!("{}", plan_table(&sp, a.rows));
         println!(
@@ -1163,6 +1176,8 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
 fn shape(a: ShapeArgs) -> Result<(), Failure> {
     use swarf::implicit::{Field, oscillator, shape};
     use swarf::plot::shape as draw;
+    output::check(&[&a.output], &[&a.input])?;
+    draw::Drawing { title: String::new(), levels: a.levels, resolution: 300, path: None }.validate()?;
     let s = shape::Shape::load(&a.input)?;
     let Some((lo, hi)) = s.bounds() else {
         return Err(swarf::Error::input(&a.input, "shape", "the shape is unbounded: intersect it with a box").into());
@@ -1200,7 +1215,7 @@ fn shape(a: ShapeArgs) -> Result<(), Failure> {
     } else {
         text.into_bytes()
     };
-    std::fs::write(&a.output, bytes).map_err(|source| swarf::Error::Io { path: a.output.clone(), source })?;
+    output::commit(&[OutputFile::new(&a.output, bytes)], &[&a.input])?;
     if !a.quiet {
         println!("wrote {}", a.output.display());
     }

@@ -59,6 +59,15 @@ pub enum Error {
         /// What went wrong.
         reason: String,
     },
+    /// An output refused before anything is written: it is one of the inputs, not a regular
+    /// file, or named twice ([`crate::io::output`]).
+    #[error("{}: {reason}", file.display())]
+    Refused {
+        /// The output asked for.
+        file: PathBuf,
+        /// Why it is refused.
+        reason: String,
+    },
 }
 
 impl Error {
@@ -179,6 +188,8 @@ pub enum Setting {
     /// The other settings of an oscillator spiral (`oscillator.rtol`, `oscillator.atol`,
     /// `oscillator.max_step`, `oscillator.start_offset`, its damping's bounds).
     Oscillator,
+    /// `shape.levels`: the level sets a picture of a shape draws.
+    ShapeLevels,
 }
 
 impl Setting {
@@ -228,6 +239,7 @@ impl Setting {
             Setting::SeqClearance => "toolseq.clearance",
             Setting::OscillatorStepover => "oscillator.stepover",
             Setting::Oscillator => "oscillator",
+            Setting::ShapeLevels => "shape.levels",
         }
     }
 }

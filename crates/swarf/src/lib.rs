@@ -66,6 +66,7 @@ pub mod geom;
 pub mod implicit;
 pub mod io;
 pub mod job;
+pub mod limits;
 pub mod model;
 pub mod plan;
 pub mod plot;

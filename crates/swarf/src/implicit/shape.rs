@@ -93,7 +93,10 @@ impl Shape {
 
     /// Reads and parses a shape file.
     pub fn load(path: &Path) -> Result<Shape> {
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io { path: path.into(), source })?;
+        let bytes = std::fs::read(path).map_err(|e| Error::input(path, "file", format!("cannot read: {e}")))?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            Error::input(path, format!("byte {}", e.utf8_error().valid_up_to()), "not UTF-8 text: a shape file is JSON")
+        })?;
         Shape::from_json(&text, path)
     }
 }

@@ -34,7 +34,9 @@ impl Ctx {
 
     fn num(&self, v: &Value, place: &str) -> Result<f64> {
         match v.as_f64() {
-            Some(x) if x.is_finite() => Ok(x),
+            Some(x) if x.is_finite() && x.abs() <= crate::limits::MAX_NUMBER => Ok(x),
+            Some(x) if x.is_finite() => Err(self
+                .err(place, format!("{x}: outside ±{:e}, the largest number swarf reads", crate::limits::MAX_NUMBER))),
             _ => Err(self.err(place, format!("expected a number, found {}", short(v)))),
         }
     }
@@ -58,7 +60,19 @@ impl Ctx {
                 .ok_or_else(|| self.err(&pl, format!("expected a point [x, y] of two numbers, found {}", short(p))))?;
             let x = self.num(&xy[0], &pl)?;
             let y = self.num(&xy[1], &pl)?;
-            pts.push(DVec2::new(x, y) * self.scale);
+            let p = DVec2::new(x, y) * self.scale;
+            if !(crate::limits::coord_ok(p.x) && crate::limits::coord_ok(p.y)) {
+                return Err(self.err(
+                    &pl,
+                    format!(
+                        "({}, {}) mm: every coordinate must be within ±{} mm",
+                        p.x,
+                        p.y,
+                        crate::limits::MAX_COORD_MM
+                    ),
+                ));
+            }
+            pts.push(p);
         }
         if pts.len() > 1 && pts.first() == pts.last() {
             pts.pop();
@@ -136,6 +150,13 @@ pub fn parse_case(path: &Path, bytes: &[u8]) -> Result<Job> {
 pub fn read_input(path: &Path) -> Result<Input> {
     let text = std::fs::read(path).map_err(|e| Error::input(path, "file", format!("cannot read: {e}")))?;
     parse_input(path, &text)
+}
+
+/// The STL file a 3D case at `path` names (`part_stl`, relative to the case), if it names one.
+pub fn part_stl_of(path: &Path) -> Option<PathBuf> {
+    let root: Value = serde_json::from_slice(&std::fs::read(path).ok()?).ok()?;
+    let stl = root.get("part_stl")?.as_str()?;
+    Some(path.parent().unwrap_or(Path::new("")).join(stl))
 }
 
 /// Parses case JSON of either kind; `path` names the file in messages and locates the STL of a
@@ -296,7 +317,26 @@ fn mesh_case(cx: &Ctx, root: &Value, path: &Path) -> Result<MeshJob> {
         }
     }
     mesh.transform(&place);
+    super::stl::check_size(path, &mesh, "part_transform and the units").map_err(|_| {
+        let (a, b) = mesh.bounds().unwrap_or_default();
+        cx.err(
+            "part_transform",
+            format!(
+                "the part placed reaches from ({:.6e}, {:.6e}, {:.6e}) to ({:.6e}, {:.6e}, {:.6e}) mm: every coordinate must be within ±{} mm",
+                a.x,
+                a.y,
+                a.z,
+                b.x,
+                b.y,
+                b.z,
+                crate::limits::MAX_COORD_MM
+            ),
+        )
+    })?;
     let floor = cx.opt_num(root, "floor")?.map_or(lo.z, |f| f * scale);
+    if !crate::limits::coord_ok(floor) {
+        return Err(cx.err("floor", format!("{floor} mm: outside ±{} mm", crate::limits::MAX_COORD_MM)));
+    }
     if floor >= hi.z {
         return Err(cx.err("floor", format!("{floor} mm: must be below the stock top {}", hi.z)));
     }

@@ -32,6 +32,7 @@ use super::{Overrides, Reading};
 use crate::error::{Error, Result, Setting};
 use crate::geom::area::Fill;
 use crate::geom::{Area, DVec2};
+use crate::limits;
 use crate::model::{Job, Tool};
 use swarf_import::{Drawing, Role};
 
@@ -142,6 +143,46 @@ pub fn job_from_drawing(d: &Drawing, ov: &Overrides) -> Result<Job> {
     job_and_reading(d, ov).map(|(job, _)| job)
 }
 
+/// Refuses, before any geometry is built, a drawing with more than [`limits::MAX_CONTOURS`]
+/// contours or one whose points or arcs, scaled by `scale`, reach beyond
+/// [`limits::MAX_COORD_MM`].
+fn check_size(d: &Drawing, scale: f64) -> Result<()> {
+    if d.shapes.len() > limits::MAX_CONTOURS {
+        return Err(Error::input(
+            &d.path,
+            "drawing",
+            format!("{} closed contours: at most {}", d.shapes.len(), limits::MAX_CONTOURS),
+        ));
+    }
+    for s in &d.shapes {
+        let far = s.contour.vertices.iter().find(|v| !(limits::coord_ok(v.x * scale) && limits::coord_ok(v.y * scale)));
+        if let Some(v) = far {
+            return Err(Error::input(
+                &d.path,
+                &s.origin,
+                format!(
+                    "a point at ({:e}, {:e}) mm: every coordinate must be within ±{} mm (is the unit right?)",
+                    v.x * scale,
+                    v.y * scale,
+                    limits::MAX_COORD_MM
+                ),
+            ));
+        }
+        for seg in s.contour.segments() {
+            if let swarf_import::contour::Segment::Arc { radius, .. } = seg
+                && !limits::coord_ok(radius * scale)
+            {
+                return Err(Error::input(
+                    &d.path,
+                    &s.origin,
+                    format!("an arc of radius {:e} mm: at most {} mm", radius * scale, limits::MAX_COORD_MM),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// [`job_from_drawing`], and what was read and inferred.
 pub fn job_and_reading(d: &Drawing, ov: &Overrides) -> Result<(Job, Reading)> {
     let file = &d.path;
@@ -149,6 +190,7 @@ pub fn job_and_reading(d: &Drawing, ov: &Overrides) -> Result<(Job, Reading)> {
         return Err(Error::input(file, "drawing", "no closed contour in the drawing"));
     }
     let scale = ov.placement.scale;
+    check_size(d, scale)?;
     let mut reading = Reading { contours: d.shapes.len(), ..Reading::default() };
     let has = |r: Role| d.shapes.iter().any(|s| s.role == r);
     let fixtures = area_of(d, scale, |r| r == Role::Fixture);

@@ -3,11 +3,13 @@
 
 pub mod case;
 pub mod drawing;
+pub mod output;
 pub mod stl;
 
 use crate::error::{Error, Result, Setting};
 use crate::geom::DVec3;
 use crate::geom::mesh::Placement;
+use crate::limits;
 use crate::model::{Cutting, Job, MeshJob, Tool, Width};
 use std::path::Path;
 
@@ -108,9 +110,45 @@ impl Overrides {
                 return Err(Error::setting(setting, format!("{v} mm: must be zero or positive")));
             }
         }
+        let lengths = [
+            (Setting::Stepdown, self.stepdown),
+            (Setting::Depth, self.depth),
+            (Setting::Allowance, self.allowance),
+            (Setting::ChainTolerance, Some(self.import.chain_tolerance)),
+            (Setting::StockMargin, Some(self.stock_margin)),
+            (Setting::StockAbove, Some(self.stock_above)),
+        ];
+        for (setting, v) in lengths {
+            if let Some(v) = v
+                && v > limits::MAX_COORD_MM
+            {
+                return Err(Error::setting(setting, format!("{v} mm: at most {} mm", limits::MAX_COORD_MM)));
+            }
+        }
+        for (setting, v) in
+            [(Setting::Feed, self.feed), (Setting::MaxFeed, self.max_feed), (Setting::SpindleSpeed, self.spindle_rpm)]
+        {
+            if let Some(v) = v
+                && !(v.is_finite() && v > 0.0 && v <= limits::MAX_RATE)
+            {
+                return Err(Error::setting(setting, format!("{v}: must be positive, at most {}", limits::MAX_RATE)));
+            }
+        }
+        if let Some(dpi) = self.import.svg_px_per_inch.filter(|d| !(*d >= 1.0 && *d <= 1e5)) {
+            return Err(Error::setting(Setting::SvgDpi, format!("{dpi} px per inch: must be in [1, 100000]")));
+        }
         let p = &self.placement;
         if !(p.scale.is_finite() && p.scale != 0.0) {
             return Err(Error::setting(Setting::PartScale, format!("{}: must be a non-zero number", p.scale)));
+        }
+        if !(1e-6..=1e6).contains(&p.scale.abs()) {
+            return Err(Error::setting(Setting::PartScale, format!("{}: its size must be in [1e-6, 1e6]", p.scale)));
+        }
+        if !p.translate.to_array().into_iter().all(limits::coord_ok) {
+            return Err(Error::setting(
+                Setting::PartTranslate,
+                format!("{}: each must be within ±{} mm", p.translate, limits::MAX_COORD_MM),
+            ));
         }
         if !p.rotate_deg.iter().all(|a| a.is_finite()) {
             return Err(Error::setting(Setting::PartRotate, format!("{:?}: must be numbers", p.rotate_deg)));
@@ -201,6 +239,9 @@ pub struct Reading {
     pub inferred: Vec<String>,
     /// What looks meant otherwise, each with the option that fixes it.
     pub warnings: Vec<String>,
+    /// Every file read: the input, and the STL a 3D case names (outputs are checked against
+    /// them, [`output::check`]).
+    pub files: Vec<std::path::PathBuf>,
 }
 
 /// The name of a unit in words.
@@ -352,6 +393,14 @@ pub fn load_input(path: &Path, ov: &Overrides) -> Result<Input> {
     read_input(path, ov).map(|(input, _)| input)
 }
 
+/// A job's error as one of the file it came from (a setting stays the option's).
+fn in_file(path: &Path, e: Error) -> Error {
+    match e {
+        Error::Job { place, reason } => Error::input(path, place, reason),
+        e => e,
+    }
+}
+
 /// [`load_input`], and what was read and inferred ([`Reading`]).
 pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
     ov.validate()?;
@@ -364,6 +413,7 @@ pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
         let mut place = ov.placement;
         place.scale *= ov.import.units.map_or(1.0, |u| u.mm());
         mesh.transform(&place);
+        stl::check_size(path, &mesh, "the unit, --part-scale and --part-translate")?;
         let mut sideways = None;
         if ov.placement.rotate_deg == [0.0; 3] {
             match stl::lay_flat(&mesh).filter(|_| ov.lay_flat) {
@@ -436,15 +486,19 @@ pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
     let input = match input {
         Input::Flat(mut job) => {
             ov.apply_to_job(&mut job);
-            job.validate()?;
+            job.validate().map_err(|e| in_file(path, e))?;
             Input::Flat(job)
         }
         Input::Mesh(mut job) => {
             ov.apply_to_mesh_job(&mut job);
-            job.validate()?;
+            job.validate().map_err(|e| in_file(path, e))?;
             Input::Mesh(job)
         }
     };
+    reading.files.push(path.to_path_buf());
+    if is_case {
+        reading.files.extend(case::part_stl_of(path));
+    }
     Ok((input, reading))
 }
 

@@ -107,6 +107,29 @@ pub fn lay_flat(mesh: &Mesh) -> Option<([f64; 3], String)> {
     Some((rot, what))
 }
 
+/// Refuses a mesh, placed, that reaches beyond [`crate::limits::MAX_COORD_MM`] (`what` says what
+/// placed it, for the message).
+pub fn check_size(path: &Path, mesh: &Mesh, what: &str) -> Result<()> {
+    let Some((lo, hi)) = mesh.bounds() else { return Ok(()) };
+    if lo.to_array().into_iter().chain(hi.to_array()).all(crate::limits::coord_ok) {
+        return Ok(());
+    }
+    Err(Error::input(
+        path,
+        "part",
+        format!(
+            "placed, it reaches from ({:.6e}, {:.6e}, {:.6e}) to ({:.6e}, {:.6e}, {:.6e}) mm: every coordinate must be within ±{} mm (are {what} right?)",
+            lo.x,
+            lo.y,
+            lo.z,
+            hi.x,
+            hi.y,
+            hi.z,
+            crate::limits::MAX_COORD_MM
+        ),
+    ))
+}
+
 /// Reads an STL file.
 pub fn read(path: &Path) -> Result<Mesh> {
     let bytes = std::fs::read(path).map_err(|e| Error::input(path, "file", format!("cannot read: {e}")))?;
@@ -187,11 +210,11 @@ fn parse_binary(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         for (k, v) in t.iter_mut().enumerate() {
             let b = o + 12 + 12 * k;
             *v = DVec3::new(f(b), f(b + 4), f(b + 8));
-            if !v.is_finite() {
+            if !(v.is_finite() && v.abs().max_element() <= crate::limits::MAX_NUMBER) {
                 return Err(Error::input(
                     path,
                     format!("facet {} (byte {}), vertex {}", i + 1, b, k + 1),
-                    format!("coordinate is not a finite number ({v})"),
+                    format!("coordinate is not a finite number within ±{:e} ({v})", crate::limits::MAX_NUMBER),
                 ));
             }
         }
@@ -267,8 +290,16 @@ fn parse_ascii(path: &Path, bytes: &[u8]) -> Result<Mesh> {
                     *x = w
                         .parse::<f64>()
                         .ok()
-                        .filter(|x| x.is_finite())
-                        .ok_or_else(|| err(l, format!("vertex coordinate \"{w}\" is not a finite number")))?;
+                        .filter(|x| x.is_finite() && x.abs() <= crate::limits::MAX_NUMBER)
+                        .ok_or_else(|| {
+                            err(
+                                l,
+                                format!(
+                                    "vertex coordinate \"{w}\" is not a finite number within ±{:e}",
+                                    crate::limits::MAX_NUMBER
+                                ),
+                            )
+                        })?;
                 }
                 *v = DVec3::from_array(c);
             }

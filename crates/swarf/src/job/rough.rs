@@ -177,7 +177,7 @@ pub(crate) fn finish(
         c.feed
     ));
     header.lines.push(format!("milling {}", if opts.link.climb { "climb" } else { "conventional" }));
-    let gcode = post::write(&toolpath, opts.post, &header);
+    let gcode = post::write(&toolpath, opts.post, &header)?;
     let mut rep = Report {
         swarf_version: env!("CARGO_PKG_VERSION").to_string(),
         input: opts.input_name.clone(),

@@ -3,6 +3,7 @@
 //! defaults for what an input does not say ([`Cutting::DEFAULT`]).
 
 use crate::error::{Error, Result, Setting};
+use crate::limits;
 
 /// A flat end mill.
 #[derive(Debug, Clone, PartialEq)]
@@ -27,13 +28,24 @@ impl Tool {
     pub fn radius(&self) -> f64 {
         self.diameter / 2.0
     }
-    /// Checks the diameter: a positive number.
+    /// Checks the diameter: a number within [`limits::MIN_TOOL_MM`] and
+    /// [`limits::MAX_TOOL_MM`].
     pub fn validate(&self) -> Result<()> {
         let d = self.diameter;
         if !(d.is_finite() && d > 0.0) {
             return Err(Error::setting(
                 Setting::ToolDiameter,
                 format!("{d} mm: the tool diameter must be a positive number"),
+            ));
+        }
+        if !(limits::MIN_TOOL_MM..=limits::MAX_TOOL_MM).contains(&d) {
+            return Err(Error::setting(
+                Setting::ToolDiameter,
+                format!(
+                    "{d} mm: the tool diameter must be between {} and {} mm",
+                    limits::MIN_TOOL_MM,
+                    limits::MAX_TOOL_MM
+                ),
             ));
         }
         Ok(())
@@ -138,13 +150,20 @@ impl Cutting {
             if !(v.is_finite() && v > 0.0) {
                 return Err(Error::setting(setting, format!("{v} {what}")));
             }
+            if v > limits::MAX_RATE {
+                return Err(Error::setting(setting, format!("{v}: at most {}", limits::MAX_RATE)));
+            }
         }
         if let Some(m) = self.max_feed
-            && !(m.is_finite() && m >= self.feed)
+            && !(m.is_finite() && m >= self.feed && m <= limits::MAX_RATE)
         {
             return Err(Error::setting(
                 Setting::MaxFeed,
-                format!("{m} mm/min: the highest feed must be a number no lower than the feed ({} mm/min)", self.feed),
+                format!(
+                    "{m} mm/min: the highest feed must be a number no lower than the feed ({} mm/min) and at most {}",
+                    self.feed,
+                    limits::MAX_RATE
+                ),
             ));
         }
         Ok(())

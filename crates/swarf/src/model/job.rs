@@ -10,6 +10,7 @@
 use super::cutting::Cutting;
 use crate::error::{Error, Result, Setting};
 use crate::geom::{Area, DVec2};
+use crate::limits;
 
 /// One 2.5D job: what to cut, with what, how.
 #[derive(Debug, Clone)]
@@ -109,6 +110,29 @@ impl Job {
             if !v.is_finite() {
                 return Err(Error::setting(setting, format!("{v}: must be a finite number")));
             }
+            if !limits::coord_ok(v) {
+                return Err(Error::setting(setting, format!("{v} mm: outside ±{} mm", limits::MAX_COORD_MM)));
+            }
+        }
+        for (what, a) in [("stock", &self.stock), ("part", &self.part), ("fixtures", &self.fixtures)] {
+            if let Some((lo, hi)) = a.bounds()
+                && !(limits::coord_ok(lo.x)
+                    && limits::coord_ok(lo.y)
+                    && limits::coord_ok(hi.x)
+                    && limits::coord_ok(hi.y))
+            {
+                return Err(Error::job(
+                    what,
+                    format!(
+                        "it reaches from ({:.6e}, {:.6e}) to ({:.6e}, {:.6e}) mm: every coordinate must be within ±{} mm (is the unit right?)",
+                        lo.x,
+                        lo.y,
+                        hi.x,
+                        hi.y,
+                        limits::MAX_COORD_MM
+                    ),
+                ));
+            }
         }
         if self.floor >= self.stock_top {
             return Err(Error::setting(
@@ -123,6 +147,12 @@ impl Job {
         }
         if self.stock.is_empty() || self.stock.area() <= 0.0 {
             return Err(Error::job("stock", "the stock outline is empty"));
+        }
+        let depth = self.stock_top - (self.floor + self.allowance_floor);
+        let levels = self.stepdown.map_or(1.0, |s| limits::level_count(depth, s));
+        if let Some(why) = limits::work_refusal(levels, self.stock.area(), self.stepover_mm()) {
+            let setting = if levels > limits::MAX_LEVELS as f64 { Setting::Stepdown } else { Setting::ToolDiameter };
+            return Err(Error::setting(setting, why));
         }
         Ok(())
     }

@@ -127,7 +127,11 @@ impl Ctx {
     fn pos(&self, obj: &Value, key: &str, place: &str) -> Result<f64> {
         let v = obj.get(key).ok_or_else(|| self.err(format!("{place}.{key}"), "missing"))?;
         match v.as_f64() {
-            Some(x) if x.is_finite() && x > 0.0 => Ok(x),
+            Some(x) if x.is_finite() && x > 0.0 && x <= crate::limits::MAX_NUMBER => Ok(x),
+            Some(x) if x.is_finite() && x > 0.0 => Err(self.err(
+                format!("{place}.{key}"),
+                format!("{x}: outside ±{:e}, the largest number swarf reads", crate::limits::MAX_NUMBER),
+            )),
             _ => Err(self.err(format!("{place}.{key}"), format!("expected a positive number, found {v}"))),
         }
     }
@@ -162,6 +166,12 @@ impl ToolDb {
             rapid_feed_mm_min: cx.pos(m, "rapid_feed_mm_min", "machine")?,
             tool_change_min,
         };
+        if machine.rapid_feed_mm_min > crate::limits::MAX_RATE {
+            return Err(cx.err(
+                "machine.rapid_feed_mm_min",
+                format!("{} mm/min: at most {}", machine.rapid_feed_mm_min, crate::limits::MAX_RATE),
+            ));
+        }
         let list =
             root.get("tools").and_then(Value::as_array).ok_or_else(|| cx.err("tools", "missing: a list of tools"))?;
         if list.is_empty() {
@@ -191,6 +201,34 @@ impl ToolDb {
                 life_min: cx.pos(t, "life_min", &place)?,
                 id,
             };
+            let d = spec.diameter;
+            if !(crate::limits::MIN_TOOL_MM..=crate::limits::MAX_TOOL_MM).contains(&d) {
+                return Err(cx.err(
+                    format!("{place}.diameter"),
+                    format!(
+                        "{d} mm: the tool diameter must be between {} and {} mm",
+                        crate::limits::MIN_TOOL_MM,
+                        crate::limits::MAX_TOOL_MM
+                    ),
+                ));
+            }
+            for (key, v, unit) in [
+                ("cutting_speed_m_min", spec.spindle_rpm(), "rpm of spindle speed"),
+                ("feed_per_tooth", spec.feed_mm_min(), "mm/min of feed"),
+            ] {
+                if v > crate::limits::MAX_RATE {
+                    return Err(cx.err(
+                        format!("{place}.{key}"),
+                        format!("it makes {v:.0} {unit}: at most {}", crate::limits::MAX_RATE),
+                    ));
+                }
+            }
+            if spec.depth_of_cut > crate::limits::MAX_COORD_MM {
+                return Err(cx.err(
+                    format!("{place}.depth_of_cut"),
+                    format!("{} mm: at most {} mm", spec.depth_of_cut, crate::limits::MAX_COORD_MM),
+                ));
+            }
             if spec.width_of_cut > spec.diameter {
                 return Err(cx.err(
                     format!("{place}.width_of_cut"),

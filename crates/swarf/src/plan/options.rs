@@ -74,8 +74,18 @@ impl LinkOptions {
     /// Checks every value against its range.
     pub fn validate(&self) -> Result<()> {
         let bad = |setting, reason: String| Err(Error::setting(setting, reason));
-        if !(self.stock_to_leave.is_finite() && self.stock_to_leave >= 0.0) {
-            return bad(Setting::StockToLeave, format!("{} mm: must be zero or positive", self.stock_to_leave));
+        if !(self.stock_to_leave.is_finite()
+            && self.stock_to_leave >= 0.0
+            && self.stock_to_leave <= crate::limits::MAX_COORD_MM)
+        {
+            return bad(
+                Setting::StockToLeave,
+                format!(
+                    "{} mm: must be zero or positive, at most {} mm",
+                    self.stock_to_leave,
+                    crate::limits::MAX_COORD_MM
+                ),
+            );
         }
         if !(self.ramp_angle_deg > 0.0 && self.ramp_angle_deg <= 45.0) {
             return bad(Setting::RampAngle, format!("{}°: must be in (0°, 45°]", self.ramp_angle_deg));
@@ -96,8 +106,11 @@ impl LinkOptions {
         if !(self.arc_tol > 0.0 && self.arc_tol <= 0.5) {
             return bad(Setting::ArcTolerance, format!("{} mm: must be in (0, 0.5]", self.arc_tol));
         }
-        if !(self.clearance.is_finite() && self.clearance > 0.0) {
-            return bad(Setting::Clearance, format!("{} mm: must be positive", self.clearance));
+        if !(self.clearance.is_finite() && self.clearance > 0.0 && self.clearance <= crate::limits::MAX_COORD_MM) {
+            return bad(
+                Setting::Clearance,
+                format!("{} mm: must be positive and at most {} mm", self.clearance, crate::limits::MAX_COORD_MM),
+            );
         }
         if !(self.approach.is_finite() && self.approach > 0.0 && self.approach <= self.clearance) {
             return bad(Setting::Approach, format!("{} mm: must be positive and at most the clearance", self.approach));

@@ -19,6 +19,19 @@ pub struct Drawing<'a> {
     pub path: Option<&'a [DVec2]>,
 }
 
+impl Drawing<'_> {
+    /// Refuses more level sets than [`crate::limits::MAX_SHAPE_LEVELS`].
+    pub fn validate(&self) -> crate::Result<()> {
+        if self.levels > crate::limits::MAX_SHAPE_LEVELS {
+            return Err(crate::Error::setting(
+                crate::Setting::ShapeLevels,
+                format!("{} level sets: at most {}", self.levels, crate::limits::MAX_SHAPE_LEVELS),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// The zero set of `field` (black), `levels` positive level sets (blue to orange) and the path
 /// (red) over the box `lo`–`hi`, as an SVG document.
 pub fn svg(field: &dyn Field, lo: DVec2, hi: DVec2, d: &Drawing) -> String {

@@ -117,9 +117,54 @@ pub const COORD_STEP: f64 = 0.001;
 /// radii of an arc agree (see [`crate::toolpath::Toolpath::quantize`]).
 pub const CENTER_STEP: f64 = 0.00001;
 
+/// The largest magnitude of any word a post writes (coordinates and centres in mm, feeds in
+/// mm/min, the spindle speed in rpm): six digits before the point, what the controllers swarf
+/// posts for read. The limits a job is validated against ([`crate::limits`]) keep every
+/// program well inside it; this is the posts' own last check.
+pub const MAX_WORD: f64 = 999_999.0;
+
+/// Refuses a toolpath with a number no controller reads as one: not finite, or larger than
+/// [`MAX_WORD`].
+pub fn check_writable(tp: &Toolpath, header: &Header) -> crate::Result<()> {
+    let ok = |v: f64| v.is_finite() && v.abs() <= MAX_WORD;
+    let bad = |what: String, v: f64| {
+        Err(crate::Error::job(
+            "G-code",
+            format!("{what} is {v}: a post writes numbers within ±{MAX_WORD} only; nothing written"),
+        ))
+    };
+    for (what, v) in [
+        ("the spindle speed", header.spindle_rpm),
+        ("the tool diameter", tp.tool.diameter),
+        ("the clearance height", tp.clearance_z),
+        ("the start's X", tp.start.x),
+        ("the start's Y", tp.start.y),
+        ("the start's Z", tp.start.z),
+    ] {
+        if !ok(v) {
+            return bad(what.into(), v);
+        }
+    }
+    for (i, m) in tp.moves.iter().enumerate() {
+        let mut words = vec![('X', m.to.x), ('Y', m.to.y), ('Z', m.to.z)];
+        if !m.is_rapid() {
+            words.push(('F', m.feed));
+        }
+        if let Motion::Arc { center, .. } = m.motion {
+            words.extend([('I', center.x), ('J', center.y)]);
+        }
+        if let Some((w, v)) = words.into_iter().find(|&(_, v)| !ok(v)) {
+            return bad(format!("move {}'s {w}", i + 1), v);
+        }
+    }
+    Ok(())
+}
+
 /// Writes the program (call [`crate::toolpath::Toolpath::quantize`] with [`COORD_STEP`] and
-/// [`CENTER_STEP`] first so that what is simulated is what is written).
-pub fn write(tp: &Toolpath, post: Post, header: &Header) -> String {
+/// [`CENTER_STEP`] first so that what is simulated is what is written), after
+/// [`check_writable`].
+pub fn write(tp: &Toolpath, post: Post, header: &Header) -> crate::Result<String> {
+    check_writable(tp, header)?;
     let d = post.dialect();
     let mut out = String::new();
     let mut line = |s: &str| {
@@ -189,7 +234,7 @@ pub fn write(tp: &Toolpath, post: Post, header: &Header) -> String {
     for s in d.end_block() {
         line(&s);
     }
-    out
+    Ok(out)
 }
 
 fn axes(w: &mut String, from: DVec3, to: DVec3, arc: bool) {
@@ -216,5 +261,27 @@ mod tests {
         assert_eq!(num(3.0, 3), "3");
         assert_eq!(num(-2.12345, 3), "-2.123");
         assert_eq!(num(1000.0, 1), "1000");
+    }
+
+    #[test]
+    fn a_number_no_controller_reads_is_refused_not_written() {
+        use crate::toolpath::{Move, MoveKind};
+        let header = Header { lines: Vec::new(), spindle_rpm: 10000.0 };
+        let mut tp = Toolpath::new(crate::model::Tool::flat(6.0), DVec3::new(0.0, 0.0, 5.0), 5.0);
+        let cut = |to: DVec3, feed: f64| Move { kind: MoveKind::Cut, motion: Motion::Line, to, feed };
+        tp.moves.push(cut(DVec3::new(10.0, 0.0, 0.0), 1000.0));
+        assert!(write(&tp, Post::LinuxCnc, &header).is_ok());
+        for (to, feed, word) in [
+            (DVec3::new(10.0, 0.0, f64::INFINITY), 1000.0, "Z is inf"),
+            (DVec3::new(1e7, 0.0, 0.0), 1000.0, "X is 10000000"),
+            (DVec3::new(10.0, 0.0, 0.0), 1e300, "F is 1"),
+        ] {
+            tp.moves[0] = cut(to, feed);
+            let e = write(&tp, Post::Grbl, &header).unwrap_err().to_string();
+            assert!(e.contains(&format!("move 1's {word}")), "{e}");
+        }
+        tp.moves[0] = cut(DVec3::new(10.0, 0.0, 0.0), 1000.0);
+        let huge_s = Header { spindle_rpm: 1e300, ..header };
+        assert!(write(&tp, Post::LinuxCnc, &huge_s).unwrap_err().to_string().contains("spindle speed"));
     }
 }

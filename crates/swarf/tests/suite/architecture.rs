@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 /// The folders (and top-level files) bottom up; a module may import its own layer and the ones
 /// below.
 const LAYERS: [&[&str]; 8] = [
-    &["error", "geom"],
+    &["error", "limits", "geom"],
     &["model", "implicit"],
     &["toolpath"],
     &["sim", "post"],

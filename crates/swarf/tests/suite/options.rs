@@ -282,6 +282,7 @@ fn setting_names_are_unique() {
         Setting::SeqClearance,
         Setting::OscillatorStepover,
         Setting::Oscillator,
+        Setting::ShapeLevels,
     ];
     let mut names: Vec<&str> = all.iter().map(|s| s.name()).collect();
     names.sort_unstable();

@@ -70,7 +70,7 @@ fn golden_dir() -> PathBuf {
 
 /// The program with the version in the first line replaced by `VERSION`.
 fn normalised(post: Post, name: &str) -> String {
-    let text = post::write(&fixture(), post, &header());
+    let text = post::write(&fixture(), post, &header()).expect("writable");
     let first = format!("(swarf {} - post {name})\n", env!("CARGO_PKG_VERSION"));
     assert!(text.starts_with(&first), "the program does not start with {first:?}:\n{text}");
     format!("(swarf VERSION - post {name})\n{}", &text[first.len()..])
@@ -119,7 +119,10 @@ fn posts_match_the_golden_files() {
 #[test]
 fn same_toolpath_same_bytes() {
     for (post, _) in POSTS {
-        assert_eq!(post::write(&fixture(), post, &header()), post::write(&fixture(), post, &header()));
+        assert_eq!(
+            post::write(&fixture(), post, &header()).expect("writable"),
+            post::write(&fixture(), post, &header()).expect("writable")
+        );
     }
 }
 
@@ -159,7 +162,7 @@ fn check_number(word: &str, dec: usize, line: &str) {
 #[test]
 fn program_properties() {
     for (post, name) in POSTS {
-        let text = post::write(&fixture(), post, &header());
+        let text = post::write(&fixture(), post, &header()).expect("writable");
         let lines: Vec<&str> = text.lines().collect();
         assert!(text.ends_with('\n'), "{name}: no final newline");
         assert!(text.is_ascii(), "{name}: not ASCII");
@@ -258,7 +261,7 @@ fn rs274_accepts_both_programs() {
     std::fs::write(work.join("tool.tbl"), table).expect("tool table");
     for (post, name) in POSTS {
         let ngc = work.join(format!("{name}.ngc"));
-        std::fs::write(&ngc, post::write(&fixture(), post, &header())).expect("write");
+        std::fs::write(&ngc, post::write(&fixture(), post, &header()).expect("writable")).expect("write");
         // (its own home: rs274 truncates and maps `$HOME/.tool.mmap`, which another rs274 run
         // at the same time would truncate under it)
         let out = std::process::Command::new(&rs274)

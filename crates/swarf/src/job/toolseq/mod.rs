@@ -104,10 +104,10 @@ impl SeqOptions {
                 format!("{}°: must be between 0° and 90°", self.ramp_deg),
             ));
         }
-        if !(self.clearance.is_finite() && self.clearance >= 0.0) {
+        if !(self.clearance.is_finite() && self.clearance >= 0.0 && self.clearance <= crate::limits::MAX_COORD_MM) {
             return Err(Error::setting(
                 Setting::SeqClearance,
-                format!("{} mm: must be zero or positive", self.clearance),
+                format!("{} mm: must be zero or positive, at most {} mm", self.clearance, crate::limits::MAX_COORD_MM),
             ));
         }
         self.sim.validate()?;
