@@ -6,5 +6,6 @@ mod common;
 
 mod cli_errors;
 mod e2e_rs274;
+mod hostile;
 mod plan_report;
 mod programs_golden;
