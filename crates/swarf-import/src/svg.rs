@@ -125,6 +125,10 @@ pub fn read_svg(path: &Path, bytes: &[u8], opts: &ImportOptions) -> Result<Drawi
         open: Vec::new(),
         skipped: Vec::new(),
         layers: Vec::new(),
+        line_starts: std::iter::once(0)
+            .chain(doc.input_text().bytes().enumerate().filter(|&(_, b)| b == b'\n').map(|(i, _)| i + 1))
+            .collect(),
+        last_pos: std::cell::Cell::new((0, 0, 0)),
     };
     let (map, vp, units, units_from, units_assumed) = r.root_mapping(root)?;
     if display_none(root) {
@@ -589,6 +593,13 @@ struct Reader<'a, 'input> {
     uses: usize,
     /// Vertices built so far.
     vertices: usize,
+    /// The byte offset where each line of the file starts: a node's line and column by a
+    /// binary search (roxmltree's `text_pos_at` scans from the start each time, which made a
+    /// file of many elements quadratic).
+    line_starts: Vec<usize>,
+    /// The last position asked for (line index, byte offset, character column): nodes are
+    /// asked for in document order, so a long line's columns are counted on from there.
+    last_pos: std::cell::Cell<(usize, usize, usize)>,
     shapes: Vec<Shape>,
     /// Open contours left out ([`ImportOptions::skip_open`]).
     skipped: Vec<String>,
@@ -655,8 +666,19 @@ impl<'a, 'input> Reader<'a, 'input> {
         ImportError::new(self.file, place, reason)
     }
 
-    fn line(&self, n: Node) -> u32 {
-        self.doc.text_pos_at(n.range().start).row
+    /// 1-based line and column (in characters) of a node's start.
+    fn pos(&self, n: Node) -> (usize, usize) {
+        let at = n.range().start;
+        let i = self.line_starts.partition_point(|&s| s <= at).saturating_sub(1);
+        let (li, from, col0) = self.last_pos.get();
+        let (from, col0) = if li == i && from <= at { (from, col0) } else { (self.line_starts[i], 0) };
+        let col = col0 + self.doc.input_text().get(from..at).map_or(at - from, |s| s.chars().count());
+        self.last_pos.set((i, at, col));
+        (i + 1, col + 1)
+    }
+
+    fn line(&self, n: Node) -> usize {
+        self.pos(n).0
     }
 
     /// `path id="p1" (line 12)`.
@@ -665,8 +687,8 @@ impl<'a, 'input> Reader<'a, 'input> {
         match n.attribute("id") {
             Some(id) => format!("{name} id=\"{}\" (line {})", clip(id), self.line(n)),
             None => {
-                let p = self.doc.text_pos_at(n.range().start);
-                format!("{name} (line {}, column {})", p.row, p.col)
+                let (row, col) = self.pos(n);
+                format!("{name} (line {row}, column {col})")
             }
         }
     }

@@ -35,7 +35,7 @@ pub const MAX_LEVELS: usize = 500;
 pub const MAX_CUT_MM: f64 = 2.0e7;
 
 /// The most contours a drawing may hold.
-pub const MAX_CONTOURS: usize = 100_000;
+pub const MAX_CONTOURS: usize = 10_000;
 
 /// The most level sets a picture of a shape draws.
 pub const MAX_SHAPE_LEVELS: usize = 1000;

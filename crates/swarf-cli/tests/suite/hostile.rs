@@ -580,6 +580,7 @@ fn catalogue() -> Vec<Entry> {
             "rough s.svg",
             &["s.svg"],
         ),
+        entry("SVG of 200 000 tiny paths", vec![("s.svg", svg(&(0..200_000).map(|i| format!("<path d=\"M{} {} h.05v.05h-.05z\"/>", (i % 1000) as f64 * 0.1, (i / 1000) as f64 * 0.1)).collect::<String>()))], "rough s.svg", &["s.svg", "10000"]),
         // STL
         entry("STL vertex 1e38", vec![("p.stl", stl_box(Some("1e38 0 5")))], "rough p.stl", &["p.stl"]),
         entry("STL vertex NaN", vec![("p.stl", stl_box(Some("nan 0 5")))], "rough p.stl", &["p.stl"]),
