@@ -17,9 +17,9 @@ fuzz_target!(|data: &[u8]| {
         return;
     }
     let opts = RoughOptions { simulate: data.len() % 2 == 0, ..RoughOptions::DEFAULT };
-    let a = swarf::rough(&job, &opts);
+    let a = swarf::rough(&job, &opts, &mut |_, _| {});
     if let Ok(a) = a {
-        let b = swarf::rough(&job, &opts).expect("the same job planned twice");
+        let b = swarf::rough(&job, &opts, &mut |_, _| {}).expect("the same job planned twice");
         assert_eq!(a.gcode, b.gcode, "the same job gave two programs");
     }
 });

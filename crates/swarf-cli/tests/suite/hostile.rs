@@ -580,7 +580,19 @@ fn catalogue() -> Vec<Entry> {
             "rough s.svg",
             &["s.svg"],
         ),
-        entry("SVG of 200 000 tiny paths", vec![("s.svg", svg(&(0..200_000).map(|i| format!("<path d=\"M{} {} h.05v.05h-.05z\"/>", (i % 1000) as f64 * 0.1, (i / 1000) as f64 * 0.1)).collect::<String>()))], "rough s.svg", &["s.svg", "10000"]),
+        entry(
+            "SVG of 200 000 tiny paths",
+            vec![(
+                "s.svg",
+                svg(&(0..200_000)
+                    .map(|i| {
+                        format!("<path d=\"M{} {} h.05v.05h-.05z\"/>", (i % 1000) as f64 * 0.1, (i / 1000) as f64 * 0.1)
+                    })
+                    .collect::<String>()),
+            )],
+            "rough s.svg",
+            &["s.svg", "10000"],
+        ),
         // STL
         entry("STL vertex 1e38", vec![("p.stl", stl_box(Some("1e38 0 5")))], "rough p.stl", &["p.stl"]),
         entry("STL vertex NaN", vec![("p.stl", stl_box(Some("nan 0 5")))], "rough p.stl", &["p.stl"]),
@@ -717,4 +729,168 @@ fn a_signal_stops_the_run_with_no_temporary_file_left() {
         c => panic!("exit {c:?}"),
     }
     assert!(names.iter().all(|n| !n.contains("swarf-tmp")), "{names:?}");
+}
+
+// ---- seeded mutations of the examples --------------------------------------------------------
+
+/// xorshift64: the mutations are the same on every run.
+struct Rng(u64);
+
+impl Rng {
+    fn below(&mut self, n: usize) -> usize {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 % n.max(1) as u64) as usize
+    }
+}
+
+/// One mutation of `text`: a number set to 0, −1, 1e300, 1e-300 or NaN, or a line dropped or
+/// doubled.
+fn mutate(text: &str, rng: &mut Rng) -> (String, String) {
+    let lines: Vec<&str> = text.lines().collect();
+    match rng.below(3) {
+        0 => {
+            // the numbers: runs of digits with their sign, point and exponent
+            let b = text.as_bytes();
+            let mut spans = Vec::new();
+            let mut i = 0;
+            while i < b.len() {
+                if b[i].is_ascii_digit() {
+                    let mut s = i;
+                    if s > 0 && b[s - 1] == b'-' {
+                        s -= 1;
+                    }
+                    while i < b.len() && (b[i].is_ascii_digit() || b"eE.+-".contains(&b[i])) {
+                        i += 1;
+                    }
+                    spans.push((s, i));
+                } else {
+                    i += 1;
+                }
+            }
+            if spans.is_empty() {
+                return (text.to_string(), "unchanged".into());
+            }
+            let (s, e) = spans[rng.below(spans.len())];
+            let v = ["0", "-1", "1e300", "1e-300", "NaN"][rng.below(5)];
+            (format!("{}{v}{}", &text[..s], &text[e..]), format!("{} -> {v} at byte {s}", &text[s..e]))
+        }
+        k => {
+            let at = rng.below(lines.len());
+            let mut out: Vec<&str> = lines.clone();
+            if k == 1 {
+                out.remove(at);
+            } else {
+                out.insert(at, lines[at]);
+            }
+            (out.join("\n") + "\n", format!("line {} {}", at + 1, if k == 1 { "dropped" } else { "doubled" }))
+        }
+    }
+}
+
+#[test]
+fn mutated_examples_end_with_0_or_2_and_never_a_bad_program() {
+    // (HOSTILE_MUTATIONS=N mutates each example N times, for a longer campaign; HOSTILE_SEED
+    // picks another sequence)
+    let per: usize = std::env::var("HOSTILE_MUTATIONS").ok().and_then(|v| v.parse().ok()).unwrap_or(6);
+    let seed: u64 = std::env::var("HOSTILE_SEED").ok().and_then(|v| v.parse().ok()).unwrap_or(0x9e37_79b9_7f4a_7c15);
+    let mut rng = Rng(seed | 1);
+    let mut jobs: Vec<(String, &str, Vec<u8>, Vec<String>)> = Vec::new();
+    let cases = [
+        "boss_with_clamp",
+        "l_pocket",
+        "narrow_slot",
+        "pocket_islands",
+        "round_pocket",
+        "simple_part",
+        "square_pocket",
+    ];
+    for name in cases {
+        let text = String::from_utf8(example(&format!("cases/{name}.json"))).expect("utf-8");
+        for k in 0..per {
+            let (m, how) = mutate(&text, &mut rng);
+            let mut args = vec!["rough".to_string(), "in.json".into(), "-o".into(), "out.ngc".into(), "-q".into()];
+            if k % 2 == 1 {
+                args.push("--no-simulate".into());
+            }
+            jobs.push((format!("{name}: {how}"), "in.json", m.into_bytes(), args));
+        }
+    }
+    // the 3D example with its part beside it, and the tool database planned on it
+    let mesh = String::from_utf8(example("3d/bowl_cavity.json"))
+        .expect("utf-8")
+        .replace("../parts/bowl_cavity.stl", "part.stl");
+    let tools = String::from_utf8(example("tools/table1.json")).expect("utf-8");
+    for _ in 0..per.div_ceil(2) + 1 {
+        let (m, how) = mutate(&mesh, &mut rng);
+        let args = ["rough", "in.json", "-o", "out.ngc", "-q", "--no-simulate"].map(String::from).to_vec();
+        jobs.push((format!("bowl_cavity: {how}"), "in.json", m.into_bytes(), args));
+    }
+    for _ in 0..per.div_ceil(2) {
+        let (m, how) = mutate(&tools, &mut rng);
+        let args = [
+            "plan",
+            "bowl.json",
+            "--tools",
+            "in.json",
+            "--report",
+            "out.json",
+            "--output-dir",
+            "plan",
+            "-q",
+            "--no-simulate",
+            "--no-pictures",
+        ]
+        .map(String::from)
+        .to_vec();
+        jobs.push((format!("table1: {how}"), "in.json", m.into_bytes(), args));
+    }
+    let shape = String::from_utf8(example("shapes/disk_minus_slot.json")).expect("utf-8");
+    for _ in 0..per + 2 {
+        let (m, how) = mutate(&shape, &mut rng);
+        let args = ["shape", "in.json", "-o", "out.svg", "-q", "--spiral", "4"].map(String::from).to_vec();
+        jobs.push((format!("shape: {how}"), "in.json", m.into_bytes(), args));
+    }
+    let mut bad = Vec::new();
+    let mut tally = [0usize; 2];
+    for (what, input, bytes, args) in &jobs {
+        let d = TempDir::new("mutant");
+        d.write(input, bytes);
+        // (what the mutated file reads beside it)
+        d.write("part.stl", example("parts/bowl_cavity.stl"));
+        d.write("bowl.json", mesh.as_bytes());
+        let inputs = d.listing().len();
+        let (code, stderr, _) = run_limited(d.path(), args);
+        let out = d.path().join(args.iter().skip_while(|a| *a != "-o" && *a != "--report").nth(1).expect("an output"));
+        let written = std::fs::read_to_string(&out).unwrap_or_default();
+        let verdict = match code {
+            _ if stderr.contains("panicked") => Some("panicked".to_string()),
+            None => Some(format!("still running after {TIME_LIMIT:?}")),
+            Some(0) if !out.is_file() => Some("exit 0 and no output".into()),
+            Some(0) if ["inf", "NaN", "nan"].iter().any(|w| written.contains(w)) => {
+                Some("a word that is not a number".into())
+            }
+            Some(0) => None,
+            Some(2) if d.listing().len() != inputs => Some(format!("exit 2 and files left: {:?}", d.listing())),
+            Some(2) if !stderr.lines().last().is_some_and(|l| l.starts_with("swarf: ")) => {
+                Some(format!("exit 2: {stderr:?}"))
+            }
+            Some(2) => None,
+            Some(c) => Some(format!("exit {c}: {stderr:?}")),
+        };
+        if let Some(v) = verdict {
+            bad.push(format!("{what}: {v}"));
+        }
+        match code {
+            Some(0) => tally[0] += 1,
+            Some(2) => tally[1] += 1,
+            _ => {}
+        }
+    }
+    eprintln!("{} mutations: {} ran (exit 0), {} refused (exit 2)", jobs.len(), tally[0], tally[1]);
+    assert!(jobs.len() >= 50, "{} mutations", jobs.len());
+    // (both outcomes: the mutations neither all break the files nor all miss)
+    assert!(tally[0] >= 5 && tally[1] >= 5, "{tally:?}");
+    assert!(bad.is_empty(), "{} of {} mutations: {bad:#?}", bad.len(), jobs.len());
 }
