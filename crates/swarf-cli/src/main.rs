@@ -1132,6 +1132,8 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
     });
     let json = serde_json::to_string_pretty(&report).map_err(|e| Failure { user: false, msg: e.to_string() })?;
     files.push(OutputFile::new(&report_path, json + "\n"));
+    // (all refused before the folder is made: a refused run leaves nothing)
+    output::check(&files.iter().map(|f| f.path.as_path()).collect::<Vec<_>>(), &inputs)?;
     std::fs::create_dir_all(&a.output_dir)
         .with_context(|| format!("{}: cannot create the folder", a.output_dir.display()))?;
     output::commit(&files, &inputs)?;
