@@ -6,7 +6,7 @@ use std::path::Path;
 fuzz_target!(|data: &[u8]| {
     let path = Path::new("fuzz.stl");
     if let Ok(mesh) = swarf::io::stl::parse(path, data) {
-        if swarf::io::stl::check_size(path, &mesh, "the placement").is_ok() {
+        if swarf::io::stl::check_size(path, &mesh, "part", "the placement").is_ok() {
             let _ = swarf::io::stl::lay_flat(&mesh);
         }
     }

@@ -809,8 +809,6 @@ fn write_outputs(
     out: &Outputs,
     extra: Vec<OutputFile>,
 ) -> Result<(), Failure> {
-    // (refused before the pictures are drawn)
-    output::check(&out.paths(), &out.inputs())?;
     // render everything first, then write: no output on failure
     let mut files = vec![OutputFile::new(&out.gcode, res.gcode.clone())];
     if let Some(p) = &out.report {
@@ -979,7 +977,6 @@ fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
     job.validate()?;
     std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create the folder", dir.display()))?;
     let opts = options(o, "demo_pocket (built-in)".into())?;
-    let res = run(&job, &opts, o.quiet)?;
     let out = Outputs {
         gcode: dir.join("demo.ngc"),
         report: Some(dir.join("demo.report.json")),
@@ -990,6 +987,9 @@ fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
     };
     let case =
         OutputFile::new(dir.join("demo_pocket.json"), include_str!("../../swarf/examples_data/demo_pocket.json"));
+    // (refused before the work, as rough's)
+    output::check(&[out.paths(), vec![case.path.as_path()]].concat(), &[])?;
+    let res = run(&job, &opts, o.quiet)?;
     write_outputs(|| Scene::of(&job), &res, &out, vec![case])?;
     if !o.quiet {
         eprintln!("{}", summary(&res.report));

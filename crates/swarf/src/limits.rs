@@ -45,6 +45,20 @@ pub fn coord_ok(v: f64) -> bool {
     v.is_finite() && v.abs() <= MAX_COORD_MM
 }
 
+/// Why a box from `lo` to `hi` (2D or 3D) is refused, if any coordinate of it lies beyond
+/// [`MAX_COORD_MM`]: `it reaches from (…) to (…) mm: every coordinate must be within ±… mm`.
+pub fn reach_refusal(lo: &[f64], hi: &[f64]) -> Option<String> {
+    if lo.iter().chain(hi).copied().all(coord_ok) {
+        return None;
+    }
+    let point = |p: &[f64]| p.iter().map(|v| format!("{v:.6e}")).collect::<Vec<_>>().join(", ");
+    Some(format!(
+        "it reaches from ({}) to ({}) mm: every coordinate must be within ±{MAX_COORD_MM} mm",
+        point(lo),
+        point(hi)
+    ))
+}
+
 /// The number of levels `depth` takes at `stepdown` (at least one), without making them.
 pub fn level_count(depth: f64, stepdown: f64) -> f64 {
     ((depth / stepdown) - 1e-9).ceil().max(1.0)
@@ -76,6 +90,9 @@ mod tests {
     #[test]
     fn coordinates_and_work_are_held_within_the_limits() {
         assert!(coord_ok(-MAX_COORD_MM) && !coord_ok(1e300) && !coord_ok(f64::NAN) && !coord_ok(f64::INFINITY));
+        assert!(reach_refusal(&[0.0, -5.0], &[MAX_COORD_MM, 5.0]).is_none());
+        let why = reach_refusal(&[0.0, 0.0, 0.0], &[2e5, 1.0, f64::NAN]).unwrap();
+        assert!(why.contains("to (2.000000e5, 1.000000e0, NaN) mm") && why.contains("±100000 mm"), "{why}");
         assert_eq!(level_count(6.0, 2.0), 3.0);
         assert_eq!(level_count(6.0, 1e-9), 6e9);
         assert!(work_refusal(3.0, 1e4, 1.5).is_none());

@@ -60,19 +60,23 @@ fn run_limited(dir: &Path, args: &[String]) -> (Option<i32>, String, Duration) {
     (code, String::from_utf8_lossy(&out.stderr).into_owned(), t0.elapsed())
 }
 
-fn check(e: &Entry) {
-    let d = TempDir::new("hostile");
-    for (name, bytes) in &e.files {
-        d.write(name, bytes);
-    }
-    let before: Vec<(String, Vec<u8>)> = d
-        .listing()
+/// Every file in `d` with its bytes.
+fn snapshot(d: &TempDir) -> Vec<(String, Vec<u8>)> {
+    d.listing()
         .into_iter()
         .map(|n| {
             let bytes = std::fs::read(d.path().join(&n)).unwrap_or_default();
             (n, bytes)
         })
-        .collect();
+        .collect()
+}
+
+fn check(e: &Entry) {
+    let d = TempDir::new("hostile");
+    for (name, bytes) in &e.files {
+        d.write(name, bytes);
+    }
+    let before = snapshot(&d);
     let (code, stderr, took) = run_limited(d.path(), &e.args);
     let what = format!("{}: swarf {}", e.name, e.args.join(" "));
     assert!(!stderr.contains("panicked"), "{what}: panicked:\n{stderr}");
@@ -90,14 +94,7 @@ fn check(e: &Entry) {
     for n in &e.needles {
         assert!(msg.contains(n), "{what}: the message does not name {n:?}: {msg}");
     }
-    let after: Vec<(String, Vec<u8>)> = d
-        .listing()
-        .into_iter()
-        .map(|n| {
-            let bytes = std::fs::read(d.path().join(&n)).unwrap_or_default();
-            (n, bytes)
-        })
-        .collect();
+    let after = snapshot(&d);
     let names = |v: &[(String, Vec<u8>)]| v.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>();
     assert_eq!(names(&after), names(&before), "{what}: files written or removed");
     for ((n, a), (_, b)) in before.iter().zip(&after) {

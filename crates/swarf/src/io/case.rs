@@ -317,22 +317,7 @@ fn mesh_case(cx: &Ctx, root: &Value, path: &Path) -> Result<MeshJob> {
         }
     }
     mesh.transform(&place);
-    super::stl::check_size(path, &mesh, "part_transform and the units").map_err(|_| {
-        let (a, b) = mesh.bounds().unwrap_or_default();
-        cx.err(
-            "part_transform",
-            format!(
-                "the part placed reaches from ({:.6e}, {:.6e}, {:.6e}) to ({:.6e}, {:.6e}, {:.6e}) mm: every coordinate must be within ±{} mm",
-                a.x,
-                a.y,
-                a.z,
-                b.x,
-                b.y,
-                b.z,
-                crate::limits::MAX_COORD_MM
-            ),
-        )
-    })?;
+    super::stl::check_size(path, &mesh, "part_transform", "part_transform and the units")?;
     let floor = cx.opt_num(root, "floor")?.map_or(lo.z, |f| f * scale);
     if !crate::limits::coord_ok(floor) {
         return Err(cx.err("floor", format!("{floor} mm: outside ±{} mm", crate::limits::MAX_COORD_MM)));

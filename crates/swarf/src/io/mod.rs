@@ -82,19 +82,26 @@ impl Overrides {
         if let Some(w) = self.width {
             w.validate()?;
         }
+        // (each positive, and at most its limit: lengths within the coordinates' range, rates
+        // within a machine's)
+        let (len, rate, none) = (limits::MAX_COORD_MM, limits::MAX_RATE, f64::INFINITY);
         let positive = [
-            (Setting::Stepdown, self.stepdown, "mm: the step-down must be a positive number"),
-            (Setting::Depth, self.depth, "mm: the depth must be positive"),
-            (Setting::Feed, self.feed, "mm/min: the feed must be positive"),
-            (Setting::SpindleSpeed, self.spindle_rpm, "rpm: the spindle speed must be positive"),
-            (Setting::SvgDpi, self.import.svg_px_per_inch, "px per inch: must be positive"),
-            (Setting::FlattenTolerance, Some(self.import.flatten_tolerance), "mm: must be positive"),
+            (Setting::Stepdown, self.stepdown, "mm: the step-down must be a positive number", len),
+            (Setting::Depth, self.depth, "mm: the depth must be positive", len),
+            (Setting::Feed, self.feed, "mm/min: the feed must be positive", rate),
+            (Setting::MaxFeed, self.max_feed, "mm/min: the highest feed must be positive", rate),
+            (Setting::SpindleSpeed, self.spindle_rpm, "rpm: the spindle speed must be positive", rate),
+            (Setting::SvgDpi, self.import.svg_px_per_inch, "px per inch: must be positive", none),
+            (Setting::FlattenTolerance, Some(self.import.flatten_tolerance), "mm: must be positive", none),
         ];
-        for (setting, v, what) in positive {
-            if let Some(v) = v
-                && !(v.is_finite() && v > 0.0)
-            {
-                return Err(Error::setting(setting, format!("{v} {what}")));
+        for (setting, v, what, max) in positive {
+            if let Some(v) = v {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(Error::setting(setting, format!("{v} {what}")));
+                }
+                if v > max {
+                    return Err(Error::setting(setting, format!("{v}: at most {max}")));
+                }
             }
         }
         let zero_or_more = [
@@ -104,34 +111,13 @@ impl Overrides {
             (Setting::StockAbove, Some(self.stock_above)),
         ];
         for (setting, v) in zero_or_more {
-            if let Some(v) = v
-                && !(v.is_finite() && v >= 0.0)
-            {
-                return Err(Error::setting(setting, format!("{v} mm: must be zero or positive")));
-            }
-        }
-        let lengths = [
-            (Setting::Stepdown, self.stepdown),
-            (Setting::Depth, self.depth),
-            (Setting::Allowance, self.allowance),
-            (Setting::ChainTolerance, Some(self.import.chain_tolerance)),
-            (Setting::StockMargin, Some(self.stock_margin)),
-            (Setting::StockAbove, Some(self.stock_above)),
-        ];
-        for (setting, v) in lengths {
-            if let Some(v) = v
-                && v > limits::MAX_COORD_MM
-            {
-                return Err(Error::setting(setting, format!("{v} mm: at most {} mm", limits::MAX_COORD_MM)));
-            }
-        }
-        for (setting, v) in
-            [(Setting::Feed, self.feed), (Setting::MaxFeed, self.max_feed), (Setting::SpindleSpeed, self.spindle_rpm)]
-        {
-            if let Some(v) = v
-                && !(v.is_finite() && v > 0.0 && v <= limits::MAX_RATE)
-            {
-                return Err(Error::setting(setting, format!("{v}: must be positive, at most {}", limits::MAX_RATE)));
+            if let Some(v) = v {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(Error::setting(setting, format!("{v} mm: must be zero or positive")));
+                }
+                if v > len {
+                    return Err(Error::setting(setting, format!("{v} mm: at most {len} mm")));
+                }
             }
         }
         if let Some(dpi) = self.import.svg_px_per_inch.filter(|d| !(*d >= 1.0 && *d <= 1e5)) {
@@ -413,7 +399,7 @@ pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
         let mut place = ov.placement;
         place.scale *= ov.import.units.map_or(1.0, |u| u.mm());
         mesh.transform(&place);
-        stl::check_size(path, &mesh, "the unit, --part-scale and --part-translate")?;
+        stl::check_size(path, &mesh, "part", "the unit, --part-scale and --part-translate")?;
         let mut sideways = None;
         if ov.placement.rotate_deg == [0.0; 3] {
             match stl::lay_flat(&mesh).filter(|_| ov.lay_flat) {

@@ -107,27 +107,14 @@ pub fn lay_flat(mesh: &Mesh) -> Option<([f64; 3], String)> {
     Some((rot, what))
 }
 
-/// Refuses a mesh, placed, that reaches beyond [`crate::limits::MAX_COORD_MM`] (`what` says what
-/// placed it, for the message).
-pub fn check_size(path: &Path, mesh: &Mesh, what: &str) -> Result<()> {
+/// Refuses a mesh, placed, that reaches beyond [`crate::limits::MAX_COORD_MM`], as an error of
+/// `path` at `place` (`what` says what placed it, for the message).
+pub fn check_size(path: &Path, mesh: &Mesh, place: &str, what: &str) -> Result<()> {
     let Some((lo, hi)) = mesh.bounds() else { return Ok(()) };
-    if lo.to_array().into_iter().chain(hi.to_array()).all(crate::limits::coord_ok) {
-        return Ok(());
+    match crate::limits::reach_refusal(&lo.to_array(), &hi.to_array()) {
+        None => Ok(()),
+        Some(why) => Err(Error::input(path, place, format!("placed, {why} (are {what} right?)"))),
     }
-    Err(Error::input(
-        path,
-        "part",
-        format!(
-            "placed, it reaches from ({:.6e}, {:.6e}, {:.6e}) to ({:.6e}, {:.6e}, {:.6e}) mm: every coordinate must be within ±{} mm (are {what} right?)",
-            lo.x,
-            lo.y,
-            lo.z,
-            hi.x,
-            hi.y,
-            hi.z,
-            crate::limits::MAX_COORD_MM
-        ),
-    ))
 }
 
 /// Reads an STL file.

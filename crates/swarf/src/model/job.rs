@@ -116,22 +116,9 @@ impl Job {
         }
         for (what, a) in [("stock", &self.stock), ("part", &self.part), ("fixtures", &self.fixtures)] {
             if let Some((lo, hi)) = a.bounds()
-                && !(limits::coord_ok(lo.x)
-                    && limits::coord_ok(lo.y)
-                    && limits::coord_ok(hi.x)
-                    && limits::coord_ok(hi.y))
+                && let Some(why) = limits::reach_refusal(&lo.to_array(), &hi.to_array())
             {
-                return Err(Error::job(
-                    what,
-                    format!(
-                        "it reaches from ({:.6e}, {:.6e}) to ({:.6e}, {:.6e}) mm: every coordinate must be within ±{} mm (is the unit right?)",
-                        lo.x,
-                        lo.y,
-                        hi.x,
-                        hi.y,
-                        limits::MAX_COORD_MM
-                    ),
-                ));
+                return Err(Error::job(what, format!("{why} (is the unit right?)")));
             }
         }
         if self.floor >= self.stock_top {

@@ -83,36 +83,12 @@ impl MeshJob {
         if !(size.x > 0.0 && size.y > 0.0 && size.z > 0.0 && size.is_finite()) {
             return Err(Error::setting(Setting::StockBox, "the box must have positive width, length and height"));
         }
-        let inside = |lo: DVec3, hi: DVec3| lo.to_array().into_iter().chain(hi.to_array()).all(limits::coord_ok);
-        if !inside(self.stock_lo, self.stock_hi) {
-            return Err(Error::setting(
-                Setting::StockBox,
-                format!(
-                    "{} to {} mm: every coordinate must be within ±{} mm",
-                    self.stock_lo,
-                    self.stock_hi,
-                    limits::MAX_COORD_MM
-                ),
-            ));
+        if let Some(why) = limits::reach_refusal(&self.stock_lo.to_array(), &self.stock_hi.to_array()) {
+            return Err(Error::setting(Setting::StockBox, format!("the box: {why}")));
         }
-        match self.mesh.bounds() {
-            Some((lo, hi)) if inside(lo, hi) => {}
-            Some((lo, hi)) => {
-                return Err(Error::job(
-                    "part",
-                    format!(
-                        "the mesh reaches from ({:.6e}, {:.6e}, {:.6e}) to ({:.6e}, {:.6e}, {:.6e}) mm: every coordinate must be within ±{} mm (is the unit or the scale right?)",
-                        lo.x,
-                        lo.y,
-                        lo.z,
-                        hi.x,
-                        hi.y,
-                        hi.z,
-                        limits::MAX_COORD_MM
-                    ),
-                ));
-            }
-            None => return Err(Error::job("part", "the mesh is empty")),
+        let (lo, hi) = self.mesh.bounds().ok_or_else(|| Error::job("part", "the mesh is empty"))?;
+        if let Some(why) = limits::reach_refusal(&lo.to_array(), &hi.to_array()) {
+            return Err(Error::job("part", format!("the mesh: {why} (is the unit or the scale right?)")));
         }
         if !(self.floor.is_finite() && self.floor + self.allowance_floor < self.stock_hi.z) {
             return Err(Error::setting(
@@ -131,9 +107,9 @@ impl MeshJob {
         let mut levels = limits::level_count(self.stock_hi.z - (self.floor + self.allowance_floor), self.stepdown);
         if levels <= limits::MAX_LEVELS as f64 {
             // (with the part's flats, each a level of its own)
-            let (_, flats) = self.bottom_and_flats();
             levels = self.levels().len() as f64;
             if levels > limits::MAX_LEVELS as f64 {
+                let (_, flats) = self.bottom_and_flats();
                 return Err(Error::job(
                     "part",
                     format!(

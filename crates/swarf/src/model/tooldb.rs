@@ -201,16 +201,8 @@ impl ToolDb {
                 life_min: cx.pos(t, "life_min", &place)?,
                 id,
             };
-            let d = spec.diameter;
-            if !(crate::limits::MIN_TOOL_MM..=crate::limits::MAX_TOOL_MM).contains(&d) {
-                return Err(cx.err(
-                    format!("{place}.diameter"),
-                    format!(
-                        "{d} mm: the tool diameter must be between {} and {} mm",
-                        crate::limits::MIN_TOOL_MM,
-                        crate::limits::MAX_TOOL_MM
-                    ),
-                ));
+            if let Err(Error::Setting { reason, .. }) = crate::model::Tool::flat(spec.diameter).validate() {
+                return Err(cx.err(format!("{place}.diameter"), reason));
             }
             for (key, v, unit) in [
                 ("cutting_speed_m_min", spec.spindle_rpm(), "rpm of spindle speed"),
