@@ -409,6 +409,7 @@ fn flag(s: Setting) -> Option<&'static str> {
         | Setting::Approach
         | Setting::EntryFeed
         | Setting::Simulation
+        | Setting::SpiralSearch
         | Setting::Oscillator => return None,
     })
 }
@@ -686,6 +687,7 @@ fn strategy_of(o: &CommonOpts) -> Result<Strategy, Failure> {
             start: o.spiral_start.as_deref().map(pair).transpose()?,
             floor: o.spiral_floor,
             optimise: o.optimise,
+            search_cells: SpiralOptions::DEFAULT.search_cells,
             adaptive,
         }),
     ];
@@ -954,9 +956,14 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
             eprintln!("swarf: warning: {w}");
         }
     }
+    // (a job that cannot be planned is said of its file)
     let res = match &input {
-        Input::Flat(job) => run(job, &opts, a.opts.quiet)?,
-        Input::Mesh(job) => with_bar(a.opts.quiet, |p| swarf::job::zlevel::rough(job, &opts, p))?,
+        Input::Flat(job) => {
+            with_bar(a.opts.quiet, |p| swarf::job::rough::rough(job, &opts, p).map_err(|e| e.in_file(&a.input)))?
+        }
+        Input::Mesh(job) => {
+            with_bar(a.opts.quiet, |p| swarf::job::zlevel::rough(job, &opts, p).map_err(|e| e.in_file(&a.input)))?
+        }
     };
     let scene = || match &input {
         Input::Flat(job) => Scene::of(job),
@@ -1029,7 +1036,7 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
     };
     opts.validate()?;
     let t0 = std::time::Instant::now();
-    let sp = swarf::job::toolseq::plan(&job, &db, &opts)?;
+    let sp = swarf::job::toolseq::plan(&job, &db, &opts).map_err(|e| e.in_file(&a.input))?;
     let compute_s = t0.elapsed().as_secs_f64();
     let post = post_of(&a.post);
     let best = sp.best();
@@ -1198,7 +1205,8 @@ fn shape(a: ShapeArgs) -> Result<(), Failure> {
                 f_end: 0.1 * w,
                 ..Default::default()
             };
-            let sp = oscillator::spiral(&s, start, &opts)?;
+            // (what stops the spiral is the shape's doing: the message names its file)
+            let sp = oscillator::spiral(&s, start, &opts).map_err(|e| e.in_file(&a.input))?;
             title =
                 format!("{title}: spiral, {:.1} turns, largest spacing {:.3} (stepover {w})", sp.turns, sp.max_spacing);
             if !a.quiet {

@@ -83,6 +83,14 @@ impl Error {
     pub fn input(file: impl Into<PathBuf>, place: impl Into<String>, reason: impl Into<String>) -> Self {
         Error::Input { file: file.into(), place: place.into(), reason: reason.into() }
     }
+    /// The error, said of `file` where it is about the job read from it: a [`Error::Job`]
+    /// becomes an [`Error::Input`] naming the file; any other error is kept.
+    pub fn in_file(self, file: impl Into<PathBuf>) -> Self {
+        match self {
+            Error::Job { place, reason } => Error::input(file, place, reason),
+            e => e,
+        }
+    }
     /// True when the error is the user's input (exit code 2), false for I/O trouble and outputs
     /// that cannot be made.
     pub fn is_user_error(&self) -> bool {
@@ -172,6 +180,8 @@ pub enum Setting {
     SpiralFloor,
     /// `spiral.start`: where the spiral starts.
     SpiralStart,
+    /// `spiral.search_cells`: the work the spiral search may spend simulating.
+    SpiralSearch,
     /// `sim.res`: the simulation cell size or sample spacing, mm.
     Resolution,
     /// `sim.engine`: the simulator that proves the program.
@@ -232,6 +242,7 @@ impl Setting {
             Setting::Zeta => "spiral.zeta",
             Setting::SpiralFloor => "spiral.floor",
             Setting::SpiralStart => "spiral.start",
+            Setting::SpiralSearch => "spiral.search_cells",
             Setting::Resolution => "sim.res",
             Setting::SimEngine => "sim.engine",
             Setting::Simulation => "sim",

@@ -12,10 +12,8 @@
 //!
 //! On a mismatch the programs are kept under `target/golden-actual/` (the failure names the
 //! folder) so that they can be compared with those of the commit that made the record. The
-//! spiral strategy's default (its floor chosen by simulating candidates) takes minutes on four of
-//! the seven cases; those four run here with a pinned floor and ζ, and all seven with the default
-//! in the ignored test `spiral_defaults` (`cargo test -p swarf-cli --test suite programs_golden:: --
-//! --ignored`).
+//! spiral strategy runs with its default (its floor chosen by simulating candidates) on every
+//! case, and on four of them also with a pinned floor and a pinned ζ.
 
 use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
@@ -36,8 +34,9 @@ fn record_path() -> PathBuf {
 const CASES: [&str; 7] =
     ["boss_with_clamp", "l_pocket", "narrow_slot", "pocket_islands", "round_pocket", "simple_part", "square_pocket"];
 
-/// Cases whose default spiral is quick enough for every run of the suite.
-const QUICK_SPIRAL: [&str; 3] = ["boss_with_clamp", "round_pocket", "square_pocket"];
+/// Cases whose spiral is also recorded with a floor and a ζ given (the default's search
+/// chooses without them).
+const PINNED_SPIRAL: [&str; 4] = ["l_pocket", "narrow_slot", "pocket_islands", "simple_part"];
 
 /// One `swarf rough` run: its name in the record and its arguments after the input.
 struct Rough {
@@ -54,22 +53,15 @@ fn case(n: &str) -> PathBuf {
     repo_root().join(format!("examples/cases/{n}.json"))
 }
 
-/// Every run of the suite (`slow`: the spiral defaults of the other four cases instead).
-fn runs(slow: bool) -> Vec<Rough> {
+/// Every run of the suite.
+fn runs() -> Vec<Rough> {
     let mut v = Vec::new();
-    if slow {
-        for n in CASES.iter().filter(|n| !QUICK_SPIRAL.contains(n)) {
-            v.push(rough(format!("{n}.spiral"), case(n), &["--strategy", "spiral"]));
-        }
-        return v;
-    }
     for n in CASES {
         for s in ["adaptive", "offset", "zigzag", "medial"] {
             v.push(rough(format!("{n}.{s}"), case(n), &["--strategy", s]));
         }
-        if QUICK_SPIRAL.contains(&n) {
-            v.push(rough(format!("{n}.spiral"), case(n), &["--strategy", "spiral"]));
-        } else {
+        v.push(rough(format!("{n}.spiral"), case(n), &["--strategy", "spiral"]));
+        if PINNED_SPIRAL.contains(&n) {
             v.push(rough(format!("{n}.spiral-floor"), case(n), &["--strategy", "spiral", "--spiral-floor", "0.35"]));
             v.push(rough(format!("{n}.spiral-zeta"), case(n), &["--strategy", "spiral", "--zeta", "0.05"]));
         }
@@ -195,7 +187,7 @@ fn read_record() -> BTreeMap<String, (String, usize)> {
 fn write_record(all: &BTreeMap<String, (String, usize)>) {
     let mut text = String::from(
         "# SHA-256, size in bytes and name of every program of tests/suite/programs_golden.rs\n\
-         # remake with: SWARF_BLESS=1 cargo test -p swarf-cli --test suite programs_golden:: (and -- --ignored)\n",
+         # remake with: SWARF_BLESS=1 cargo test -p swarf-cli --test suite programs_golden::\n",
     );
     for (name, (h, n)) in all {
         text.push_str(&format!("{h} {n} {name}\n"));
@@ -205,9 +197,9 @@ fn write_record(all: &BTreeMap<String, (String, usize)>) {
 }
 
 /// Runs every job on all cores and checks (or, with `SWARF_BLESS`, records) their programs.
-fn check(slow: bool) {
-    let dir = TempDir::new(if slow { "golden-slow" } else { "golden" });
-    let jobs = runs(slow);
+fn check() {
+    let dir = TempDir::new("golden");
+    let jobs = runs();
     let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
     let next = std::sync::atomic::AtomicUsize::new(0);
     let got = std::sync::Mutex::new(Vec::new());
@@ -224,14 +216,8 @@ fn check(slow: bool) {
         }
     });
     let mut got = got.into_inner().expect("lock");
-    if !slow {
-        got.extend(run_plan(dir.path(), &[], "trim"));
-        got.extend(run_plan(
-            dir.path(),
-            &["--decomposition", "regions", "--post", "grbl", "--clearance", "3"],
-            "regions",
-        ));
-    }
+    got.extend(run_plan(dir.path(), &[], "trim"));
+    got.extend(run_plan(dir.path(), &["--decomposition", "regions", "--post", "grbl", "--clearance", "3"], "regions"));
     let mut record = read_record();
     if std::env::var_os("SWARF_BLESS").is_some() {
         for (name, bytes) in &got {
@@ -269,21 +255,14 @@ fn check(slow: bool) {
 
 #[test]
 fn programs_are_unchanged() {
-    check(false);
-}
-
-/// The spiral strategy's default on the four cases where it takes minutes.
-#[test]
-#[ignore = "minutes: the spiral optimiser's default on four cases"]
-fn spiral_defaults() {
-    check(true);
+    check();
 }
 
 /// The record covers every job of the suite, and a change of one byte is a mismatch.
 #[test]
 fn the_record_is_complete_and_strict() {
     let record = read_record();
-    for r in runs(false).iter().chain(runs(true).iter()) {
+    for r in runs().iter() {
         assert!(record.contains_key(&r.name), "{} is not in the record", r.name);
     }
     assert!(record.keys().any(|k| k.starts_with("plan-trim/")), "no plan programs in the record");

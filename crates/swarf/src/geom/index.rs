@@ -6,7 +6,7 @@
 //! a tree, and it is ten lines of code; each edge is listed in every cell its bounding box
 //! touches (compressed-row storage).
 
-use super::{Area, DVec2, closest_param, dist_point_segment, dist_segment_segment};
+use super::{Area, DVec2, closest_param, dist_arc_segment, dist_point_segment, dist_segment_segment, in_sweep};
 
 /// Segments bucketed in a uniform grid.
 #[derive(Debug, Clone)]
@@ -155,6 +155,32 @@ impl EdgeIndex {
             let d = (q - p).length();
             if d < best.map_or(max, |b| b.1) {
                 best = Some((q, d));
+            }
+        });
+        best
+    }
+
+    /// Distance from the arc of centre `c` and radius `r` from angle `a0` sweeping `sweep` to
+    /// the nearest edge, or `max` when none is closer.
+    pub fn arc_distance(&self, c: DVec2, r: f64, a0: f64, sweep: f64, max: f64) -> f64 {
+        // the arc's box: its ends and the axis points it passes
+        let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+        let ends = [a0, a0 + sweep];
+        let quarter = std::f64::consts::FRAC_PI_2;
+        for (k, phi) in ends.into_iter().chain((0..4).map(|k| k as f64 * quarter)).enumerate() {
+            if k >= 2 && !in_sweep(phi, a0, sweep) {
+                continue;
+            }
+            let p = c + DVec2::from_angle(phi) * r;
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        let mut best = max;
+        let m = DVec2::splat(max);
+        self.for_each_near(lo - m, hi + m, |_, p, q| {
+            let dd = dist_arc_segment(c, r, a0, sweep, p, q);
+            if dd < best {
+                best = dd;
             }
         });
         best

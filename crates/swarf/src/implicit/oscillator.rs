@@ -18,6 +18,7 @@ use super::shape::Field;
 use crate::error::{Error, Result, Setting};
 use crate::geom::DVec2;
 use crate::geom::index::EdgeIndex;
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// Turning sense of the spiral around its start point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -259,17 +260,17 @@ pub fn spiral(field: &dyn Field, start: DVec2, opts: &SpiralOptions) -> Result<S
 }
 
 /// [`spiral`], with the samples of `field` its ζ per level reads level sets from, when the
-/// caller has them: `grid` must be [`Grid::of_field`] of the same field (it is sampled here,
-/// once for all the spiral's tries, when not given).
-pub fn spiral_on(field: &dyn Field, start: DVec2, opts: &SpiralOptions, grid: Option<&Grid>) -> Result<Spiral> {
+/// caller has them: `samples` must be [`Samples::of_field`] of the same field (it is sampled
+/// here, once for all the spiral's tries, when not given).
+pub fn spiral_on(field: &dyn Field, start: DVec2, opts: &SpiralOptions, samples: Option<&Samples>) -> Result<Spiral> {
     let Damping::Stepover { w, .. } = opts.damping else {
         return spiral_once(field, start, opts, 1.0, None);
     };
     let sampled;
-    let grid = match grid {
+    let grid = match samples {
         Some(g) => Some(g),
         None if field.bounds().is_some_and(|(lo, hi)| (hi - lo).length().is_finite() && (hi - lo).length() > 0.0) => {
-            sampled = Grid::of_field(field);
+            sampled = Samples::of_field(field);
             sampled.as_ref()
         }
         None => None,
@@ -300,14 +301,14 @@ pub fn spiral_on(field: &dyn Field, start: DVec2, opts: &SpiralOptions, grid: Op
     }
 }
 
-/// One spiral with ζ per level scaled by `gain`; `grid`: [`Grid::of_field`] of `field`, or
+/// One spiral with ζ per level scaled by `gain`; `grid`: [`Samples::of_field`] of `field`, or
 /// `None` to sample it here.
 fn spiral_once(
     field: &dyn Field,
     start: DVec2,
     opts: &SpiralOptions,
     gain: f64,
-    grid: Option<&Grid>,
+    grid: Option<&Samples>,
 ) -> Result<Spiral> {
     let (lo, hi) = field.bounds().ok_or_else(|| Error::job("spiral", "the shape is unbounded"))?;
     let size = (hi - lo).length();
@@ -351,22 +352,12 @@ fn spiral_once(
             let grid = match grid {
                 Some(g) => g,
                 None => {
-                    sampled = Grid::of_field(field).ok_or_else(|| Error::job("spiral", "the shape is unbounded"))?;
+                    sampled = Samples::of_field(field).ok_or_else(|| Error::job("spiral", "the shape is unbounded"))?;
                     &sampled
                 }
             };
-            Some(ZetaTable::new(
-                grid,
-                field,
-                lo,
-                hi,
-                opts.f_end,
-                f0,
-                gain * safety * w,
-                zeta_min,
-                zeta_max,
-                opts.engagement,
-            ))
+            let profile = grid.profile(field, lo, hi, opts.f_end, f0, opts.engagement.is_some());
+            Some(ZetaTable::new(&profile, gain * safety * w, zeta_min, zeta_max, opts.engagement))
         }
         Damping::Constant(_) => None,
     };
@@ -578,6 +569,109 @@ pub fn max_turn_spacing(pts: &[DVec2], dirs: &[DVec2], thetas: &[f64], reach: f6
     (worst, missed)
 }
 
+/// The samples of a field that a spiral's ζ per level reads, kept for every spiral over the
+/// field: the grid, and for each range of levels a spiral asks for, the level sets with `|∇f|`
+/// and the level's radius of curvature at each of their vertices. The search's candidates
+/// (each its own floor) and the rescaled gains of one spiral differ only in the arithmetic
+/// [`ZetaTable::new`] does over these: the curvatures (four evaluations of `f` per vertex)
+/// were half of a spiral's planning when each spiral measured them again.
+pub struct Samples {
+    /// [`Grid::of_field`] of the field.
+    pub grid: Grid,
+    /// The profiles measured so far, by (f_end, f0, with curvature).
+    profiles: Mutex<Vec<(ProfileKey, SharedProfile)>>,
+}
+
+type ProfileKey = (u64, u64, bool);
+
+/// A profile measured once by whichever spiral asks first, the others waiting for it.
+type SharedProfile = Arc<OnceLock<Arc<Profile>>>;
+
+impl Samples {
+    /// The samples of `field` ([`Grid::of_field`]), or `None` where it is unbounded.
+    pub fn of_field(field: &dyn Field) -> Option<Samples> {
+        Some(Samples { grid: Grid::of_field(field)?, profiles: Mutex::new(Vec::new()) })
+    }
+
+    /// Measures now what a spiral over `field` (the field these samples are of) from `start`
+    /// with `opts` reads from them (see [`spiral_on`]).
+    pub fn prepare(&self, field: &dyn Field, start: DVec2, opts: &SpiralOptions) {
+        if let (Damping::Stepover { .. }, Some((lo, hi))) = (opts.damping, field.bounds()) {
+            self.profile(field, lo, hi, opts.f_end, field.eval(start).v, opts.engagement.is_some());
+        }
+    }
+
+    /// The profile of the levels from `f_end` to `f0` (the field's bounds `lo`, `hi`), measured
+    /// once; with `curvature` the radii of curvature too.
+    fn profile(&self, field: &dyn Field, lo: DVec2, hi: DVec2, f_end: f64, f0: f64, curvature: bool) -> Arc<Profile> {
+        let key = (f_end.to_bits(), f0.to_bits(), curvature);
+        let cell = {
+            let mut profiles = self.profiles.lock().unwrap_or_else(|e| e.into_inner());
+            match profiles.iter().find(|(k, _)| *k == key) {
+                Some((_, c)) => c.clone(),
+                None => {
+                    let c = Arc::new(OnceLock::new());
+                    profiles.push((key, c.clone()));
+                    c
+                }
+            }
+        };
+        cell.get_or_init(|| Arc::new(Profile::new(&self.grid, field, lo, hi, f_end, f0, curvature))).clone()
+    }
+}
+
+/// The level sets of [`ZetaTable::ROWS`] levels from `f_end` up to `f0`.
+struct Profile {
+    rows: Vec<ProfileRow>,
+}
+
+struct ProfileRow {
+    /// The level.
+    c: f64,
+    /// `∫ |∇f|` along the level set.
+    flux: f64,
+    /// `|∇f|` and the level's radius of curvature (infinite where it bends away from the
+    /// cleared side, or not measured) at each end of each of the level set's segments.
+    ends: Vec<(f64, f64)>,
+}
+
+impl Profile {
+    /// The radius of curvature is 1/κ, κ = div(−∇f/|∇f|) by central differences.
+    fn new(grid: &Grid, field: &dyn Field, lo: DVec2, hi: DVec2, f_end: f64, f0: f64, curvature: bool) -> Profile {
+        use rayon::prelude::*;
+        let h = 1e-4 * (hi - lo).length();
+        let normal = |p: DVec2| -field.eval(p).g.normalize_or_zero();
+        let rho = |p: DVec2| {
+            if !curvature {
+                return f64::INFINITY;
+            }
+            let kappa = ((normal(p + DVec2::X * h) - normal(p - DVec2::X * h)).x
+                + (normal(p + DVec2::Y * h) - normal(p - DVec2::Y * h)).y)
+                / (2.0 * h);
+            // (a level bending the other way engages the tool less than a straight cut)
+            if kappa > 1e-12 { 1.0 / kappa } else { f64::INFINITY }
+        };
+        let n = ZetaTable::ROWS;
+        // (each row on its own: the same rows whatever the number of threads)
+        let rows = (0..n)
+            .into_par_iter()
+            .map(|k| {
+                let c = f_end + (f0 - f_end) * k as f64 / n as f64;
+                let segs = grid.contour(c);
+                let mut flux = 0.0;
+                let mut ends = Vec::with_capacity(2 * segs.len());
+                for [(a, ga), (b, gb)] in &segs {
+                    flux += (*b - *a).length() * 0.5 * (ga.length() + gb.length());
+                    ends.push((ga.length(), rho(*a)));
+                    ends.push((gb.length(), rho(*b)));
+                }
+                ProfileRow { c, flux, ends }
+            })
+            .collect();
+        Profile { rows }
+    }
+}
+
 /// ζ per level for a stepover (see the module documentation).
 struct ZetaTable {
     /// (level, ζ), levels increasing.
@@ -586,56 +680,32 @@ struct ZetaTable {
 }
 
 impl ZetaTable {
-    /// With `eng` (tool radius, angle), the gap allowed at each point is also held to
-    /// [`engagement_spacing`] at the level's radius of curvature there, 1/κ with
-    /// κ = div(−∇f/|∇f|) by central differences.
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        grid: &Grid,
-        field: &dyn Field,
-        lo: DVec2,
-        hi: DVec2,
-        f_end: f64,
-        f0: f64,
-        w: f64,
-        zmin: f64,
-        zmax: f64,
-        eng: Option<EngagementLimit>,
-    ) -> ZetaTable {
-        let h = 1e-4 * (hi - lo).length();
-        let normal = |p: DVec2| -field.eval(p).g.normalize_or_zero();
-        let allowed = |p: DVec2, g: f64| {
+    /// Levels in a table.
+    const ROWS: usize = 64;
+
+    /// From the level sets of `profile`: with `eng` (tool radius, angle), the gap allowed at
+    /// each point is also held to [`engagement_spacing`] at the level's radius of curvature
+    /// there.
+    fn new(profile: &Profile, w: f64, zmin: f64, zmax: f64, eng: Option<EngagementLimit>) -> ZetaTable {
+        let allowed = |g: f64, rho: f64| {
             let w_here = match eng {
-                Some(EngagementLimit { r, theta, floor }) => {
-                    let kappa = ((normal(p + DVec2::X * h) - normal(p - DVec2::X * h)).x
-                        + (normal(p + DVec2::Y * h) - normal(p - DVec2::Y * h)).y)
-                        / (2.0 * h);
-                    // (a level bending the other way engages the tool less than a straight cut)
-                    let rho = if kappa > 1e-12 { 1.0 / kappa } else { f64::INFINITY };
-                    w.min(engagement_spacing(rho, r, theta).max(floor * w))
-                }
+                Some(EngagementLimit { r, theta, floor }) => w.min(engagement_spacing(rho, r, theta).max(floor * w)),
                 None => w,
             };
             w_here * g
         };
-        let n = 64;
-        let mut rows = Vec::with_capacity(n);
-        for k in 0..n {
-            let c = f_end + (f0 - f_end) * k as f64 / n as f64;
-            let segs = grid.contour(c);
-            if segs.is_empty() {
-                rows.push((c, zmax));
-                continue;
-            }
-            let mut flux = 0.0;
-            let mut wg = f64::INFINITY;
-            for [(a, ga), (b, gb)] in &segs {
-                flux += (*b - *a).length() * 0.5 * (ga.length() + gb.length());
-                wg = wg.min(allowed(*a, ga.length())).min(allowed(*b, gb.length()));
-            }
-            let z = if flux > 0.0 { wg / flux } else { zmax };
-            rows.push((c, z.clamp(zmin, zmax)));
-        }
+        let rows = profile
+            .rows
+            .iter()
+            .map(|row| {
+                if row.ends.is_empty() {
+                    return (row.c, zmax);
+                }
+                let wg = row.ends.iter().fold(f64::INFINITY, |m, &(g, rho)| m.min(allowed(g, rho)));
+                let z = if row.flux > 0.0 { wg / row.flux } else { zmax };
+                (row.c, z.clamp(zmin, zmax))
+            })
+            .collect();
         ZetaTable { rows, zeta_max: zmax }
     }
 

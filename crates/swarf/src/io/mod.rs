@@ -379,14 +379,6 @@ pub fn load_input(path: &Path, ov: &Overrides) -> Result<Input> {
     read_input(path, ov).map(|(input, _)| input)
 }
 
-/// A job's error as one of the file it came from (a setting stays the option's).
-fn in_file(path: &Path, e: Error) -> Error {
-    match e {
-        Error::Job { place, reason } => Error::input(path, place, reason),
-        e => e,
-    }
-}
-
 /// [`load_input`], and what was read and inferred ([`Reading`]).
 pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
     ov.validate()?;
@@ -472,12 +464,12 @@ pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
     let input = match input {
         Input::Flat(mut job) => {
             ov.apply_to_job(&mut job);
-            job.validate().map_err(|e| in_file(path, e))?;
+            job.validate().map_err(|e| e.in_file(path))?;
             Input::Flat(job)
         }
         Input::Mesh(mut job) => {
             ov.apply_to_mesh_job(&mut job);
-            job.validate().map_err(|e| in_file(path, e))?;
+            job.validate().map_err(|e| e.in_file(path))?;
             Input::Mesh(job)
         }
     };

@@ -121,17 +121,22 @@ pub fn rough_planned(
     started: Instant,
     progress: &mut dyn FnMut(Stage, f64),
 ) -> Result<RoughResult> {
-    let Planned { mut toolpath, levels: zs, regions, proof } = planned;
+    let Planned { mut toolpath, levels: zs, regions, proof, proof_s } = planned;
     toolpath.quantize(post::COORD_STEP, post::CENTER_STEP);
-    let compute_s = started.elapsed().as_secs_f64();
+    // (a proof the strategy made while planning is proving time, not planning time)
+    let proof_s = if proof.is_some() && opts.simulate { proof_s } else { 0.0 };
+    let compute_s = (started.elapsed().as_secs_f64() - proof_s).max(0.0);
     log::info!("{}: {} planned in {compute_s:.2} s, {} moves", job.name, opts.strategy.name(), toolpath.moves.len());
     progress(Stage::Plan, 1.0);
     let about = About { name: &job.name, what: "", cutting: &job.cutting, floor: job.floor, depth: job.level_depth() };
-    finish(toolpath, zs, &about, opts, compute_s, progress, |tp, progress| match proof {
+    let mut done = finish(toolpath, zs, &about, opts, compute_s, progress, |tp, progress| match proof {
         // (the strategy simulated this very program with these settings while planning it)
         Some(p) => Ok(p),
         None => crate::sim::simulate(job, &regions, &opts.sim, tp, &mut |f| progress(Stage::Simulate, f)),
-    })
+    })?;
+    done.report.simulate_s += proof_s;
+    done.report.total_s += proof_s;
+    Ok(done)
 }
 
 /// What the program's header and report say about the job.
@@ -222,6 +227,8 @@ pub struct Planned {
     /// planning (the spiral's search simulates its choice); [`rough`] then takes it as the
     /// program's proof instead of simulating it again.
     pub proof: Option<(Replay, crate::sim::Rest)>,
+    /// Seconds the strategy spent making `proof` (the report counts them as proving).
+    pub proof_s: f64,
 }
 
 /// Plans the program of a 2.5D job (no posting, no simulation), or `None` when a strategy that
@@ -244,5 +251,11 @@ pub fn plan(job: &Job, opts: &RoughOptions) -> Result<Option<Planned>> {
         Context { job, regions: &regions, geom: &geom, link: &opts.link, sim: &opts.sim, zs: &zs, finish: &finish };
     let Some(program) = opts.strategy.plan(&cx)? else { return Ok(None) };
     log::debug!("planned in {:.3} s", t0.elapsed().as_secs_f64());
-    Ok(Some(Planned { toolpath: program.toolpath, levels: zs, regions, proof: program.proof }))
+    Ok(Some(Planned {
+        toolpath: program.toolpath,
+        levels: zs,
+        regions,
+        proof: program.proof,
+        proof_s: program.proof_s,
+    }))
 }

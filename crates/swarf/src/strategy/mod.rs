@@ -92,11 +92,13 @@ pub(crate) struct Program {
     pub toolpath: Toolpath,
     /// Its replay and rest on the job's material model, with the job's simulation settings.
     pub proof: Option<(Replay, Rest)>,
+    /// Seconds the strategy spent making `proof` (reported as proving, not planning).
+    pub proof_s: f64,
 }
 
 impl From<Toolpath> for Program {
     fn from(toolpath: Toolpath) -> Program {
-        Program { toolpath, proof: None }
+        Program { toolpath, proof: None, proof_s: 0.0 }
     }
 }
 

@@ -22,7 +22,7 @@ use crate::error::{Error, Result};
 use crate::geom::arcfit::Piece;
 use crate::geom::{DVec2, biarc};
 use crate::implicit::levels::Grid;
-use crate::implicit::oscillator::{self, Damping, EngagementLimit, Spiral, Turn, spiral_on};
+use crate::implicit::oscillator::{self, Damping, EngagementLimit, Samples, Spiral, Turn, spiral_on};
 use crate::implicit::region::AreaField;
 use crate::implicit::shape::{Field, maximum};
 use crate::model::{Job, Regions};
@@ -78,6 +78,9 @@ pub struct SpiralOptions {
     /// Also try four other start points round the maximum of f (paper 4 §4, Figs. 8–9); the
     /// floor is chosen by simulation unless `floor` or `zeta` is set.
     pub optimise: bool,
+    /// The cells the search's simulations may sweep before it begins no new round of
+    /// candidates (see `optimise_spiral`): [`SEARCH_CELLS`] by default.
+    pub search_cells: f64,
     /// The adaptive passes that clear round islands (a pocket with islands gets a spiral over
     /// its island-free core only).
     pub adaptive: AdaptiveOptions,
@@ -85,8 +88,14 @@ pub struct SpiralOptions {
 
 impl SpiralOptions {
     /// ζ per level, the floor chosen by simulation, from the maximum of f.
-    pub const DEFAULT: SpiralOptions =
-        SpiralOptions { zeta: None, start: None, floor: None, optimise: false, adaptive: AdaptiveOptions::DEFAULT };
+    pub const DEFAULT: SpiralOptions = SpiralOptions {
+        zeta: None,
+        start: None,
+        floor: None,
+        optimise: false,
+        search_cells: SEARCH_CELLS,
+        adaptive: AdaptiveOptions::DEFAULT,
+    };
 }
 
 impl Default for SpiralOptions {
@@ -181,13 +190,13 @@ struct PieceField {
 }
 
 /// A grid sampled once and shared by the threads that ask for it.
-type SharedGrid = Arc<OnceLock<Option<Grid>>>;
+type SharedGrid = Arc<OnceLock<Option<Samples>>>;
 
 struct PieceShape {
     base: AreaField,
     top: DVec2,
     fmax: f64,
-    /// [`Grid::of_field`] of the shaped function from each start asked for so far.
+    /// [`Samples::of_field`] of the shaped function from each start asked for so far.
     grids: Mutex<Vec<(DVec2, SharedGrid)>>,
 }
 
@@ -213,12 +222,31 @@ impl SpiralFields {
             .collect();
         SpiralFields { pieces }
     }
+
+    /// The region's connected pieces.
+    pub(crate) fn pieces(&self) -> usize {
+        self.pieces.len()
+    }
+
+    /// Samples now, every piece at once, what the spirals of `choice`'s start read (each piece's
+    /// grid and the profile of its levels, the same for every damping): the spirals of a round
+    /// of the search, planned in parallel, would otherwise wait for them one piece after another.
+    pub(crate) fn prepare(&self, job: &Job, geom: &LayerGeom, link: &LinkOptions, choice: &SpiralChoice) {
+        use rayon::prelude::*;
+        self.pieces.par_iter().for_each(|piece| {
+            if let Some(s) = piece_spiral(job, piece, geom, link, choice)
+                && let Some(samples) = s.samples.get().and_then(Option::as_ref)
+            {
+                samples.prepare(&s.field, s.start, &s.opts);
+            }
+        });
+    }
 }
 
 impl PieceShape {
     /// The shaped function from `start` and its samples (sampled once for every spiral from
     /// there).
-    fn shaped(&self, start: DVec2) -> (Shaped<'_>, Arc<OnceLock<Option<Grid>>>) {
+    fn shaped(&self, start: DVec2) -> (Shaped<'_>, SharedGrid) {
         let field = Shaped { f: &self.base, s: start, l: SHAPE_LENGTH * self.fmax.max(1e-3) };
         let cell = {
             let mut grids = self.grids.lock().unwrap_or_else(|e| e.into_inner());
@@ -231,7 +259,7 @@ impl PieceShape {
                 }
             }
         };
-        cell.get_or_init(|| Grid::of_field(&field));
+        cell.get_or_init(|| Samples::of_field(&field));
         (field, cell)
     }
 }
@@ -350,33 +378,43 @@ impl Field for Shaped<'_> {
 /// largest inscribed radius).
 pub const SHAPE_LENGTH: f64 = 1.0;
 
-fn plan_piece(
+/// What a spiral over a piece from a start is made from: the shaped function and its samples,
+/// the start, f there and the level the spiral ends at, and the oscillator's options.
+struct PieceSpiral<'a> {
+    field: Shaped<'a>,
+    samples: SharedGrid,
+    start: DVec2,
+    f0: f64,
+    f_end: f64,
+    opts: oscillator::SpiralOptions,
+}
+
+/// The spiral of `choice` over `piece`, before it is made; `None` where no spiral can be made
+/// there.
+fn piece_spiral<'a>(
     job: &Job,
-    piece: &PieceField,
+    piece: &'a PieceField,
     geom: &LayerGeom,
     link: &LinkOptions,
     choice: &SpiralChoice,
-) -> Result<Option<PiecePath>> {
+) -> Option<PieceSpiral<'a>> {
     let islands = piece.holes;
-    let Some(shape) = &piece.shape else { return Ok(None) };
+    let shape = piece.shape.as_ref()?;
     let start = choice.start.unwrap_or(shape.top);
-    let (field, grid) = shape.shaped(start);
-    let Some(grid) = grid.get().and_then(Option::as_ref) else { return Ok(None) };
+    let (field, cell) = shape.shaped(start);
+    let grid = &cell.get().and_then(Option::as_ref)?.grid;
     let f0 = field.eval(start).v;
     // with islands, out to a level a quarter of a stepover above the one where the spiral's
     // set would close round an island (the level there pinches to a point), and no further
     // than CORE_FRACTION of the way down
     let f_end = match islands {
-        true => match core_level_on(&field, grid, start, TRACK_LEVEL) {
-            Some(c) => (c + 0.25 * geom.step).max(CORE_FRACTION * f0),
-            None => return Ok(None),
-        },
+        true => (core_level_on(&field, grid, start, TRACK_LEVEL)? + 0.25 * geom.step).max(CORE_FRACTION * f0),
         false => TRACK_LEVEL,
     };
     if f0 <= f_end + 1e-3 {
         // a sliver the tool fits in only along a line, or a core too small: nothing a spiral
         // can do
-        return Ok(None);
+        return None;
     }
     let r = geom.r;
     let theta = job.cutting.width.engagement_deg().to_radians();
@@ -395,7 +433,24 @@ fn plan_piece(
         accept_gap: Some(f64::INFINITY),
         ..Default::default()
     };
-    let sp = match spiral_on(&field, start, &opts, Some(grid)) {
+    Some(PieceSpiral { field, samples: cell, start, f0, f_end, opts })
+}
+
+fn plan_piece(
+    job: &Job,
+    piece: &PieceField,
+    geom: &LayerGeom,
+    link: &LinkOptions,
+    choice: &SpiralChoice,
+) -> Result<Option<PiecePath>> {
+    let islands = piece.holes;
+    let Some(PieceSpiral { field, samples, start, f0, f_end, opts }) = piece_spiral(job, piece, geom, link, choice)
+    else {
+        return Ok(None);
+    };
+    let Some(samples) = samples.get().and_then(Option::as_ref) else { return Ok(None) };
+    let r = geom.r;
+    let sp = match spiral_on(&field, start, &opts, Some(samples)) {
         Ok(sp) => sp,
         // (with islands the adaptive passes clear what a spiral cannot)
         Err(_) if islands => return Ok(None),
@@ -543,6 +598,12 @@ impl Trial {
         self.sim.is_some_and(|s| s.feasible)
     }
 }
+
+/// The cells the search's simulations may sweep (cutting length × tool diameter / cell², summed
+/// over the candidates simulated) before it stops beginning new rounds. Simulating a spiral
+/// costs about 0.04–0.1 s per million cells on the 2-core machine the shared drawings were
+/// timed on; this keeps a search within about 10 s there.
+pub const SEARCH_CELLS: f64 = 60e6;
 
 /// The floors ([`SpiralChoice::floor`]) the optimiser tries, widest first.
 pub const FLOORS: [f64; 6] = [0.5, 0.42, 0.35, 0.28, 0.22, 0.16];

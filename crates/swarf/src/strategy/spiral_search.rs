@@ -34,6 +34,9 @@ impl Clearing for SpiralOptions {
         {
             return Err(Error::setting(Setting::SpiralStart, format!("{p}: must be a point of finite numbers")));
         }
+        if self.search_cells.is_nan() || self.search_cells <= 0.0 {
+            return Err(Error::setting(Setting::SpiralSearch, format!("{}: must be positive", self.search_cells)));
+        }
         self.adaptive.validate()
     }
 
@@ -55,7 +58,7 @@ pub(crate) fn plan_spiral(cx: &Context, opts: &SpiralOptions) -> Result<Program>
     let mut missed = None;
     let (choice, planned) = match (opts.zeta, opts.floor) {
         (None, None) => {
-            let (best, trials, planned) = optimise_spiral_planned(cx, opts)?;
+            let (best, trials, planned, stopped) = optimise_spiral_planned(cx, opts)?;
             for t in &trials {
                 log::debug!("spiral trial {t:?}");
             }
@@ -63,14 +66,16 @@ pub(crate) fn plan_spiral(cx: &Context, opts: &SpiralOptions) -> Result<Program>
                 && let Some(sim) = t.sim.filter(|s| !s.feasible)
             {
                 missed = Some(format!(
-                    "no spiral candidate was clean within the engagement bound in simulation; \
+                    "no spiral candidate {}was clean within the engagement bound in simulation; \
                      the nearest is kept: floor {:.2}, {} gouges, rest {:.2} %, p99 {:.0} deg \
-                     against a bound of {:.0}",
+                     against a bound of {:.0}{}",
+                    if stopped { "tried within the search's bounds " } else { "" },
                     best.floor,
                     sim.gouges,
                     100.0 * sim.rest,
                     sim.p99_deg,
-                    spiral_bound(cx.job)
+                    spiral_bound(cx.job),
+                    if stopped { "; a lower floor can be chosen (--spiral-floor)" } else { "" }
                 ));
             }
             (best, planned)
@@ -95,68 +100,130 @@ pub(crate) fn plan_spiral(cx: &Context, opts: &SpiralOptions) -> Result<Program>
 /// gouge) and the engagement bound (p99 outside the entry ≤ the reference + 10°), as swarf's
 /// simulator (`cx.sim`) judges them (`cx.finish` is not used).
 ///
-/// Every candidate of [`candidates`] is planned (quick), and its time is read off
-/// its program. Simulation (the slow part) is spent only where it can change the answer: the
-/// candidates are simulated in order of time, fastest first, and the first feasible one is the
-/// optimum. A damping (floor) that broke the engagement bound from one start is not simulated
-/// from the others: the engagement depends on the damping far more than on the start. At most
-/// [`MAX_SIMULATED`] are simulated; when none of those is feasible, the one that misses by
-/// least is returned (fewest gouges, then least rest beyond the limit, then least engagement
-/// beyond the bound), and the program says so. Returns the choice and every
-/// trial.
+/// The candidates of [`candidates`] are planned [`ROUND`] at a time, in their order (the
+/// highest floor first: a lower floor holds the engagement better in tight turns and is
+/// slower, so the fastest feasible one is as a rule among the first), and each one's time is
+/// read off its program. Simulation (the slow part) is spent only where it can change the
+/// answer: after each round, the candidates planned and not yet simulated are simulated in
+/// order of time, fastest first, and the first feasible one is kept; the next round is
+/// planned only when none was. A damping (floor) that broke the engagement bound from one
+/// start is not simulated from the others (the engagement depends on the damping far more than
+/// on the start), nor is a higher floor from the same start.
+///
+/// The search is bounded: it simulates at most [`MAX_SIMULATED`] candidates, and begins no
+/// further round once the cells its simulations swept reach [`SpiralOptions::search_cells`]
+/// ([`super::spiral::SEARCH_CELLS`] by default: a large pocket is judged on its first round). When no candidate it simulated is feasible, the one that
+/// misses by least is returned (fewest gouges, then least rest beyond the limit, then least
+/// engagement beyond the bound), and the program says so. Every bound counts the work, not the
+/// clock: the choice is the same on any machine and any number of threads. Returns the choice
+/// and every trial.
 pub(crate) fn optimise_spiral(cx: &Context, opts: &SpiralOptions) -> Result<(SpiralChoice, Vec<Trial>)> {
-    optimise_spiral_planned(cx, opts).map(|(choice, trials, _)| (choice, trials))
+    optimise_spiral_planned(cx, opts).map(|(choice, trials, ..)| (choice, trials))
+}
+
+/// Candidates planned at once, in parallel: a constant, so that what the search plans and
+/// chooses does not depend on the number of threads.
+pub const ROUND: usize = 2;
+
+/// The cells the tool sweeps along the cutting moves of `tp` on a grid of cells `res` wide.
+fn swept_cells(tp: &Toolpath, d: f64, res: f64, rapid_rate: f64) -> f64 {
+    tp.totals(rapid_rate).cut_length_mm * d / (res * res)
 }
 
 /// `optimise_spiral`, with the program of the choice as planned (without finishing passes) and
 /// its simulation, when it was simulated.
-fn optimise_spiral_planned(cx: &Context, opts: &SpiralOptions) -> Result<(SpiralChoice, Vec<Trial>, Option<Program>)> {
+/// And whether the search stopped at its bounds before it had tried every candidate.
+#[allow(clippy::type_complexity)]
+fn optimise_spiral_planned(
+    cx: &Context,
+    opts: &SpiralOptions,
+) -> Result<(SpiralChoice, Vec<Trial>, Option<Program>, bool)> {
     use rayon::prelude::*;
     let job = cx.job;
     let bound = spiral_bound(job);
     let candidates = candidates(cx.regions, cx.geom, opts.start, opts.optimise)?;
+    let t0 = std::time::Instant::now();
     let fields = SpiralFields::new(cx.regions, cx.geom);
-    let mut planned: Vec<Option<(Toolpath, Toolpath)>> =
-        candidates.par_iter().map(|c| plan_spiral_trial(cx, &fields, opts, c)).collect();
-    let mut proofs: Vec<Option<(Replay, Rest)>> = (0..candidates.len()).map(|_| None).collect();
-    let mut trials: Vec<Trial> = candidates
-        .iter()
-        .zip(&planned)
-        .map(|(c, tp)| Trial {
-            choice: *c,
-            time_min: tp.as_ref().map(|(_, written)| written.totals(job.cutting.rapid_rate).time_min),
-            sim: None,
-        })
-        .collect();
-    let mut order: Vec<usize> = (0..trials.len()).filter(|&i| trials[i].time_min.is_some()).collect();
-    // (stable: equal times keep the candidates' order, so the result is deterministic)
-    order.sort_by(|&a, &b| trials[a].time_min.unwrap_or(f64::MAX).total_cmp(&trials[b].time_min.unwrap_or(f64::MAX)));
+    if let Some(c) = candidates.first() {
+        fields.prepare(job, cx.geom, cx.link, c);
+    }
+    log::debug!("spiral: fields of {} pieces in {:.2} s", fields.pieces(), t0.elapsed().as_secs_f64());
+    let n = candidates.len();
+    let mut planned: Vec<Option<(Toolpath, Toolpath)>> = (0..n).map(|_| None).collect();
+    let mut proofs: Vec<Option<(Replay, Rest, f64)>> = (0..n).map(|_| None).collect();
+    let mut trials: Vec<Trial> = candidates.iter().map(|c| Trial { choice: *c, time_min: None, sim: None }).collect();
+    let (d, res) = (job.cutting.tool.diameter, cx.sim.res_for(job.cutting.tool.diameter));
     let mut best = None;
     let mut simulated = 0;
-    for &i in &order {
-        if simulated == MAX_SIMULATED {
-            break;
+    let mut swept = 0.0;
+    let mut next = 0;
+    while best.is_none() && next < n && simulated < MAX_SIMULATED && swept < opts.search_cells {
+        let round = next..(next + ROUND).min(n);
+        let t0 = std::time::Instant::now();
+        let made: Vec<_> =
+            candidates[round.clone()].par_iter().map(|c| plan_spiral_trial(cx, &fields, opts, c)).collect();
+        log::debug!("spiral: candidates {round:?} planned in {:.2} s", t0.elapsed().as_secs_f64());
+        for (i, tp) in round.clone().zip(made) {
+            trials[i].time_min = tp.as_ref().map(|(_, written)| written.totals(job.cutting.rapid_rate).time_min);
+            planned[i] = tp;
         }
-        let same_damping =
-            |t: &Trial| t.choice.zeta == trials[i].choice.zeta && t.choice.floor == trials[i].choice.floor;
-        if trials.iter().any(|t| same_damping(t) && t.sim.is_some_and(|s| s.p99_deg > bound)) {
-            continue;
-        }
-        let Some((_, tp)) = &planned[i] else { continue };
-        simulated += 1;
-        let (sim, proof) = judge_spiral(job, cx.regions, cx.sim, tp)?;
-        trials[i].sim = Some(sim);
-        proofs[i] = Some(proof);
-        if sim.feasible {
-            best = Some(i);
-            break;
+        next = round.end;
+        let mut order: Vec<usize> =
+            (0..next).filter(|&i| trials[i].time_min.is_some() && trials[i].sim.is_none()).collect();
+        // (stable: equal times keep the candidates' order, so the result is deterministic)
+        order.sort_by(|&a, &b| {
+            trials[a].time_min.unwrap_or(f64::MAX).total_cmp(&trials[b].time_min.unwrap_or(f64::MAX))
+        });
+        for i in order {
+            if simulated == MAX_SIMULATED {
+                break;
+            }
+            let c = trials[i].choice;
+            // a damping that broke the bound from any start, or a lower floor that did from
+            // this one (the gaps in tight turns only widen with the floor)
+            let broke = |t: &Trial| {
+                t.sim.is_some_and(|s| s.p99_deg > bound)
+                    && t.choice.zeta == c.zeta
+                    && (t.choice.floor == c.floor || (t.choice.start == c.start && t.choice.floor < c.floor))
+            };
+            if trials.iter().any(broke) {
+                continue;
+            }
+            let Some((_, tp)) = &planned[i] else { continue };
+            simulated += 1;
+            swept += swept_cells(tp, d, res, job.cutting.rapid_rate);
+            let t0 = std::time::Instant::now();
+            let (sim, (rp, rest)) = judge_spiral(job, cx.regions, cx.sim, tp)?;
+            let secs = t0.elapsed().as_secs_f64();
+            log::debug!("spiral: candidate {i} simulated in {secs:.2} s");
+            trials[i].sim = Some(sim);
+            proofs[i] = Some((rp, rest, secs));
+            if sim.feasible {
+                best = Some(i);
+                break;
+            }
         }
     }
+    let stopped = best.is_none() && next < n;
     let best = best
         .or_else(|| nearest_miss(&trials, bound))
         .ok_or_else(|| Error::job("spiral strategy", "no spiral could be made from any start or ζ"))?;
-    let proof = proofs.swap_remove(best);
-    Ok((trials[best].choice, trials, planned.swap_remove(best).map(|(toolpath, _)| Program { toolpath, proof })))
+    if stopped {
+        log::info!(
+            "spiral search stopped after {next} of {n} candidates ({simulated} simulated, {:.0} M cells swept)",
+            swept / 1e6
+        );
+    }
+    let (proof, proof_s) = match proofs.swap_remove(best) {
+        Some((rp, rest, secs)) => (Some((rp, rest)), secs),
+        None => (None, 0.0),
+    };
+    Ok((
+        trials[best].choice,
+        trials,
+        planned.swap_remove(best).map(|(toolpath, _)| Program { toolpath, proof, proof_s }),
+        stopped,
+    ))
 }
 
 /// Of the simulated trials, the one that missed by least: fewest gouges, then least rest

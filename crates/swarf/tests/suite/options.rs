@@ -112,6 +112,11 @@ fn bad_options_name_their_setting() {
             Setting::SpiralStart,
         ),
         (
+            "spiral search without cells",
+            spiral(SpiralOptions { search_cells: f64::NAN, ..SpiralOptions::DEFAULT }),
+            Setting::SpiralSearch,
+        ),
+        (
             "spiral's adaptive overshoot 100°",
             spiral(SpiralOptions {
                 adaptive: AdaptiveOptions { overshoot_deg: 100.0, ..AdaptiveOptions::DEFAULT },
@@ -275,6 +280,7 @@ fn setting_names_are_unique() {
         Setting::Zeta,
         Setting::SpiralFloor,
         Setting::SpiralStart,
+        Setting::SpiralSearch,
         Setting::Resolution,
         Setting::SimEngine,
         Setting::Simulation,

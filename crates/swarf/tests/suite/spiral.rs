@@ -153,10 +153,15 @@ fn the_optimiser_keeps_the_fastest_feasible_spiral() {
     for t in trials {
         let Some(time) = t.time_min else { continue };
         if time < t_best {
-            // a faster candidate was simulated and failed, or shares a damping that failed
+            // a faster candidate was simulated and failed, or shares a damping that failed, or
+            // a lower floor from its start failed
             let failed = |u: &swarf::strategy::spiral::Trial| u.sim.is_some_and(|s| !s.feasible);
-            let pruned =
-                trials.iter().any(|u| u.choice.floor == t.choice.floor && u.choice.zeta == t.choice.zeta && failed(u));
+            let pruned = trials.iter().any(|u| {
+                u.choice.zeta == t.choice.zeta
+                    && (u.choice.floor == t.choice.floor
+                        || (u.choice.start == t.choice.start && u.choice.floor < t.choice.floor))
+                    && failed(u)
+            });
             assert!(failed(t) || pruned, "a faster candidate was passed over: {t:?}");
         }
     }
@@ -165,4 +170,32 @@ fn the_optimiser_keeps_the_fastest_feasible_spiral() {
     let widest = trials.iter().find(|t| t.choice.floor == 0.5 && t.choice.start.is_none()).expect("floor 0.5");
     assert!(widest.sim.is_some_and(|s| !s.feasible), "{widest:?}");
     assert!(choice.floor < 0.5);
+}
+
+/// The search stops at its work bound: on the L (where the widest floors break the engagement
+/// bound) a budget of one cell lets it plan and simulate its first round only, and the program
+/// it keeps, the nearest miss, says the search stopped; with the default budget it goes on to a
+/// feasible floor. The same choice every time (the bound counts cells, not seconds).
+#[test]
+fn the_spiral_search_stops_at_its_work_bound() {
+    let job = case("l_pocket.json");
+    let sim = SimOptions { res: Some(0.1), ..Default::default() };
+    let link = RoughOptions::default().link;
+    let tight = SpiralOptions { search_cells: 1.0, ..SpiralOptions::DEFAULT };
+    let search = |o: &SpiralOptions| {
+        swarf::strategy::spiral_search::optimise_spiral_job(&job, o, &link, &sim).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let (choice, trials) = search(&tight);
+    let planned: Vec<_> = trials.iter().filter(|t| t.time_min.is_some()).collect();
+    assert_eq!(planned.len(), swarf::strategy::spiral_search::ROUND, "{trials:#?}");
+    assert!(planned.iter().all(|t| t.sim.is_some_and(|s| !s.feasible)), "{trials:#?}");
+    assert!(trials.iter().skip(planned.len()).all(|t| t.time_min.is_none() && t.sim.is_none()));
+    assert_eq!(search(&tight).0, choice, "the same choice again");
+    let (full, _) = search(&SpiralOptions::DEFAULT);
+    assert!(full.floor < choice.floor.min(0.42), "{full:?} against {choice:?}");
+    // the program says why it breaks the bound
+    let opts = RoughOptions { strategy: Strategy::Spiral(tight), sim, ..Default::default() };
+    let r = swarf::job::rough::rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{e}"));
+    let first = r.gcode.lines().find(|l| l.contains("spiral candidate")).unwrap_or_default();
+    assert!(first.contains("tried within the search's bounds") && first.contains("--spiral-floor"), "{first}");
 }
