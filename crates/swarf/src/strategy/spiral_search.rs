@@ -1,6 +1,7 @@
-//! The spiral's search (paper 4 §4, Figs. 8–9): candidate dampings and start points, each
-//! planned, the fastest simulated first, the first that clears the pocket within the
-//! engagement bound kept; and the baseline of the docs' table, the best constant ζ.
+//! The spiral's search (paper 4 §4, Figs. 8–9): candidate dampings and start points planned
+//! two at a time, those planned simulated fastest first, the first that clears the pocket
+//! within the engagement bound kept, within a bound on the work; and the baseline of the docs'
+//! table, the best constant ζ.
 
 use super::spiral::{
     ENGAGEMENT_FLOOR, SpiralChoice, SpiralFields, SpiralOptions, Trial, TrialSim, candidates, link_spiral,
@@ -112,9 +113,10 @@ pub(crate) fn plan_spiral(cx: &Context, opts: &SpiralOptions) -> Result<Program>
 ///
 /// The search is bounded: it simulates at most [`MAX_SIMULATED`] candidates, and begins no
 /// further round once the cells its simulations swept reach [`SpiralOptions::search_cells`]
-/// ([`super::spiral::SEARCH_CELLS`] by default: a large pocket is judged on its first round). When no candidate it simulated is feasible, the one that
-/// misses by least is returned (fewest gouges, then least rest beyond the limit, then least
-/// engagement beyond the bound), and the program says so. Every bound counts the work, not the
+/// ([`super::spiral::SEARCH_CELLS`] by default: a large pocket is judged on its first round).
+/// When no candidate it simulated is feasible, the one that misses by least is returned (fewest
+/// gouges, then least rest beyond the limit, then least engagement beyond the bound), and the
+/// program says so. Every bound counts the work, not the
 /// clock: the choice is the same on any machine and any number of threads. Returns the choice
 /// and every trial.
 pub(crate) fn optimise_spiral(cx: &Context, opts: &SpiralOptions) -> Result<(SpiralChoice, Vec<Trial>)> {
