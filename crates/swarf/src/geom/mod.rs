@@ -1,5 +1,6 @@
 //! Planar geometry: areas with holes and their booleans and offsets, polylines, distance
-//! queries, simplification and arc fitting.
+//! queries, simplification and arc fitting; and the 3D geometry jobs read: meshes and NURBS
+//! surfaces.
 //!
 //! Areas are polygons (arcs of the input are flattened with an explicit chord tolerance) and all
 //! booleans, offsets, strokes and polyline clipping go through one thin adapter over the
@@ -18,6 +19,7 @@ pub mod index;
 #[doc(hidden)]
 pub mod medial;
 pub mod mesh;
+pub mod nurbs;
 #[doc(hidden)]
 pub mod simplify;
 

@@ -3,6 +3,7 @@
 
 pub mod case;
 pub mod drawing;
+pub mod five;
 pub mod output;
 pub mod stl;
 

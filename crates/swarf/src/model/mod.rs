@@ -1,8 +1,9 @@
 //! The job model: part, stock, fixtures and free space (paper 1 §4), the tool and the cutting
 //! data, the derived regions every strategy works with, mesh jobs (paper 3) and the tool
-//! database of the tool-sequence search.
+//! database of the tool-sequence search; and 5-axis pockets over NURBS surfaces ([`five`]).
 
 mod cutting;
+pub mod five;
 mod job;
 mod mesh_job;
 pub mod tooldb;
