@@ -8,6 +8,7 @@
 //! when they change, and a comment says what each section is. The same toolpath always gives
 //! the same bytes.
 
+pub mod five;
 pub mod grbl;
 pub mod linuxcnc;
 
