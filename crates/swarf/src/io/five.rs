@@ -368,6 +368,23 @@ mod tests {
     }
 
     #[test]
+    fn the_field_the_normal_and_the_walls() {
+        // the top leans: 10 above the floor at u = 0, and 10 up and 10 along x at u = 1
+        let text = case("").replacen("[[40, 0, 10], [40, 20, 10]]", "[[50, 0, 10], [50, 20, 10]]", 1);
+        let j = parse(&text).unwrap_or_else(|e| panic!("{e}"));
+        assert!((j.floor_normal(0.3, 0.6) - DVec3::Z).length() < 1e-12);
+        assert!((j.axis_field(0.0, 0.5) - DVec3::Z).length() < 1e-12);
+        let lean = j.axis_field(1.0, 0.5);
+        assert!((lean - DVec3::new(1.0, 0.0, 1.0).normalize()).length() < 1e-12, "{lean}");
+        let normal = parse(&text.replace("\"kind\"", "\"orientation\": {\"rule\": \"normal\"}, \"kind\""))
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert!((normal.axis_field(1.0, 0.5) - DVec3::Z).length() < 1e-12);
+        // the ruled wall along v0 halfway up at s = 1: between (40, 0, 0) and (50, 0, 10)
+        assert!((j.wall_point(Side::V0, 1.0, 0.5).expect("a wall") - DVec3::new(45.0, 0.0, 5.0)).length() < 1e-12);
+        assert_eq!(j.wall_point(Side::U0, 0.5, 0.5), None);
+    }
+
+    #[test]
     fn errors_name_the_file_the_place_and_the_reason() {
         let bad = [
             (case("").replace("\"kind\": \"fiveaxis_pocket\"", "\"kind\": \"pocket\""), "kind"),

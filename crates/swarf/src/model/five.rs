@@ -6,6 +6,7 @@
 //! are those of the case format in `docs/five.md`.
 
 use crate::geom::nurbs::NurbsSurface;
+use glam::{DVec2, DVec3};
 
 /// A side of the parameter square.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -23,6 +24,17 @@ pub enum Side {
 impl Side {
     /// The four sides, in the order of [`FiveJob::boundaries`].
     pub const ALL: [Side; 4] = [Side::U0, Side::U1, Side::V0, Side::V1];
+
+    /// The point (u, v) of the side at `s` in [0, 1], s running with the floor's own
+    /// parameter along it (u along v0 and v1, v along u0 and u1).
+    pub fn at(self, s: f64) -> DVec2 {
+        match self {
+            Side::U0 => DVec2::new(0.0, s),
+            Side::U1 => DVec2::new(1.0, s),
+            Side::V0 => DVec2::new(s, 0.0),
+            Side::V1 => DVec2::new(s, 1.0),
+        }
+    }
 
     /// The side's key in the case format.
     pub fn key(self) -> &'static str {
@@ -177,6 +189,40 @@ impl FiveJob {
     /// The boundary of `side`.
     pub fn boundary(&self, side: Side) -> &Boundary {
         &self.boundaries[Side::ALL.iter().position(|s| *s == side).unwrap_or(0)]
+    }
+
+    /// The floor's unit normal at (u, v), turned towards the top (zero where the floor is
+    /// degenerate).
+    pub fn floor_normal(&self, u: f64, v: f64) -> DVec3 {
+        let n = self.floor.eval(u, v).normal();
+        let up = self.top.eval(u, v).p - self.floor.eval(u, v).p;
+        if n.dot(up) < 0.0 { -n } else { n }
+    }
+
+    /// The direction the tool axis follows at (u, v) before tilting for the walls: the field
+    /// V = (T − S) / |T − S|, or the floor's normal ([`AxisRule`]); the normal where T meets S.
+    pub fn axis_field(&self, u: f64, v: f64) -> DVec3 {
+        match self.axis {
+            AxisRule::Normal => self.floor_normal(u, v),
+            AxisRule::Field => {
+                let d = self.top.eval(u, v).p - self.floor.eval(u, v).p;
+                if d.length() > 1e-12 { d.normalize() } else { self.floor_normal(u, v) }
+            }
+        }
+    }
+
+    /// The wall of `side` at (s, w): its own surface, or the ruled surface
+    /// `(1 − w) S(b(s)) + w T(b(s))` from the floor's edge (w = 0) to the top's (w = 1); `None`
+    /// for an open side.
+    pub fn wall_point(&self, side: Side, s: f64, w: f64) -> Option<DVec3> {
+        match self.boundary(side) {
+            Boundary::Open => None,
+            Boundary::Wall(Some(surface)) => Some(surface.eval(s, w).p),
+            Boundary::Wall(None) => {
+                let b = side.at(s);
+                Some(self.floor.eval(b.x, b.y).p.lerp(self.top.eval(b.x, b.y).p, w))
+            }
+        }
     }
 }
 
