@@ -267,7 +267,7 @@ pub fn spiral_on(field: &dyn Field, start: DVec2, opts: &SpiralOptions, samples:
         return spiral_once(field, start, opts, 1.0, None);
     };
     let sampled;
-    let grid = match samples {
+    let samples = match samples {
         Some(g) => Some(g),
         None if field.bounds().is_some_and(|(lo, hi)| (hi - lo).length().is_finite() && (hi - lo).length() > 0.0) => {
             sampled = Samples::of_field(field);
@@ -281,7 +281,7 @@ pub fn spiral_on(field: &dyn Field, start: DVec2, opts: &SpiralOptions, samples:
     let mut gain = 1.0;
     let mut best: Option<Spiral> = None;
     for _ in 0..5 {
-        let s = spiral_once(field, start, opts, gain, grid)?;
+        let s = spiral_once(field, start, opts, gain, samples)?;
         let m = s.max_spacing;
         log::debug!("spiral gain {gain:.4}: {:.1} turns, length {:.1}, max spacing {m:.4} (w {w})", s.turns, s.length);
         let ok = m <= opts.accept_gap.unwrap_or(w);
@@ -297,18 +297,18 @@ pub fn spiral_on(field: &dyn Field, start: DVec2, opts: &SpiralOptions, samples:
     }
     match best {
         Some(s) => Ok(s),
-        None => spiral_once(field, start, opts, gain, grid),
+        None => spiral_once(field, start, opts, gain, samples),
     }
 }
 
-/// One spiral with ζ per level scaled by `gain`; `grid`: [`Samples::of_field`] of `field`, or
-/// `None` to sample it here.
+/// One spiral with ζ per level scaled by `gain`; `samples`: [`Samples::of_field`] of `field`,
+/// or `None` to sample it here.
 fn spiral_once(
     field: &dyn Field,
     start: DVec2,
     opts: &SpiralOptions,
     gain: f64,
-    grid: Option<&Samples>,
+    samples: Option<&Samples>,
 ) -> Result<Spiral> {
     let (lo, hi) = field.bounds().ok_or_else(|| Error::job("spiral", "the shape is unbounded"))?;
     let size = (hi - lo).length();
@@ -349,14 +349,14 @@ fn spiral_once(
     let table = match opts.damping {
         Damping::Stepover { w, safety, zeta_min, zeta_max } => {
             let sampled;
-            let grid = match grid {
+            let samples = match samples {
                 Some(g) => g,
                 None => {
                     sampled = Samples::of_field(field).ok_or_else(|| Error::job("spiral", "the shape is unbounded"))?;
                     &sampled
                 }
             };
-            let profile = grid.profile(field, lo, hi, opts.f_end, f0, opts.engagement.is_some());
+            let profile = samples.profile(field, lo, hi, opts.f_end, f0, opts.engagement.is_some());
             Some(ZetaTable::new(&profile, gain * safety * w, zeta_min, zeta_max, opts.engagement))
         }
         Damping::Constant(_) => None,

@@ -33,12 +33,7 @@ impl Ctx {
     }
 
     fn num(&self, v: &Value, place: &str) -> Result<f64> {
-        match v.as_f64() {
-            Some(x) if x.is_finite() && x.abs() <= crate::limits::MAX_NUMBER => Ok(x),
-            Some(x) if x.is_finite() => Err(self
-                .err(place, format!("{x}: outside ±{:e}, the largest number swarf reads", crate::limits::MAX_NUMBER))),
-            _ => Err(self.err(place, format!("expected a number, found {}", short(v)))),
-        }
+        number(&self.file, v, place)
     }
 
     fn opt_num(&self, obj: &Value, key: &str) -> Result<Option<f64>> {
@@ -124,7 +119,22 @@ impl Ctx {
     }
 }
 
-fn short(v: &Value) -> String {
+/// A JSON number of `file` at `place` within the largest number swarf reads, or the error that
+/// says what is there instead (the case readers' one reading of a number).
+pub(super) fn number(file: &Path, v: &Value, place: &str) -> Result<f64> {
+    match v.as_f64() {
+        Some(x) if x.is_finite() && x.abs() <= crate::limits::MAX_NUMBER => Ok(x),
+        Some(x) if x.is_finite() => Err(Error::input(
+            file,
+            place,
+            format!("{x}: outside ±{:e}, the largest number swarf reads", crate::limits::MAX_NUMBER),
+        )),
+        _ => Err(Error::input(file, place, format!("expected a number, found {}", short(v)))),
+    }
+}
+
+/// A JSON value, shortened for a message.
+pub(super) fn short(v: &Value) -> String {
     let s = v.to_string();
     if s.len() > 40 { format!("{}…", &s[..s.char_indices().nth(40).map_or(s.len(), |(i, _)| i)]) } else { s }
 }

@@ -3,6 +3,7 @@
 //! [`FiveJob`]. Every error names the file and the key path (`floor.knots_u[5]`, `tool.taper_deg`)
 //! and what is wrong; every default is the format's.
 
+use super::case::short;
 use crate::error::{Error, Result};
 use crate::geom::DVec3;
 use crate::geom::nurbs::NurbsSurface;
@@ -21,13 +22,7 @@ impl Ctx {
     }
 
     fn num(&self, v: &Value, place: &str) -> Result<f64> {
-        match v.as_f64() {
-            Some(x) if x.is_finite() && x.abs() <= limits::MAX_NUMBER => Ok(x),
-            Some(x) if x.is_finite() => {
-                Err(self.err(place, format!("{x}: outside ±{:e}, the largest number swarf reads", limits::MAX_NUMBER)))
-            }
-            _ => Err(self.err(place, format!("expected a number, found {}", short(v)))),
-        }
+        super::case::number(&self.file, v, place)
     }
 
     /// `obj[key]` as a number, `default` when absent.
@@ -206,12 +201,6 @@ impl Ctx {
         }
         Ok(m)
     }
-}
-
-/// A JSON value, shortened for a message.
-fn short(v: &Value) -> String {
-    let s = v.to_string();
-    if s.chars().count() > 40 { format!("{}…", s.chars().take(40).collect::<String>()) } else { s }
 }
 
 /// Whether the bytes are a 5-axis case (`"kind": "fiveaxis_pocket"`).

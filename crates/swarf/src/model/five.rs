@@ -12,13 +12,13 @@ use glam::{DVec2, DVec3};
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Side {
     /// u = 0.
-    U0,
+    U0 = 0,
     /// u = 1.
-    U1,
+    U1 = 1,
     /// v = 0.
-    V0,
+    V0 = 2,
     /// v = 1.
-    V1,
+    V1 = 3,
 }
 
 impl Side {
@@ -188,7 +188,8 @@ pub struct FiveJob {
 impl FiveJob {
     /// The boundary of `side`.
     pub fn boundary(&self, side: Side) -> &Boundary {
-        &self.boundaries[Side::ALL.iter().position(|s| *s == side).unwrap_or(0)]
+        // (the sides are numbered in the order of `Side::ALL`)
+        &self.boundaries[side as usize]
     }
 
     /// The floor's unit normal at (u, v), turned towards the top (zero where the floor is

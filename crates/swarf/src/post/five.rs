@@ -9,7 +9,7 @@
 //! limits nearest the previous C, and unwraps C so that it never jumps by more than 180° from
 //! one move to the next (at A = 0, where C is free, C stays where it was).
 
-use super::num;
+use super::{num, writable};
 use crate::error::{Error, Result};
 use crate::geom::DVec3;
 use crate::model::five::{CutterKind, FiveTool, Machine};
@@ -80,11 +80,10 @@ pub fn write_cl(name: &str, tool: &FiveTool, moves: &[AxisMove]) -> Result<Strin
 /// Every number finite and writable, every axis a direction, every feed positive.
 fn check(moves: &[AxisMove]) -> Result<()> {
     for (k, m) in moves.iter().enumerate() {
-        let writable = |v: f64| v.is_finite() && v.abs() <= super::MAX_WORD;
         if !(m.tip.to_array().iter().all(|v| writable(*v)) && m.axis.is_finite() && m.axis.length() > 1e-9) {
             return Err(Error::job("five-axis post", format!("move {k}: a tip or axis that cannot be written")));
         }
-        let feed_ok = m.feed.is_finite() && m.feed > 0.0 && m.feed <= super::MAX_WORD;
+        let feed_ok = writable(m.feed) && m.feed > 0.0;
         if !(m.rapid || feed_ok) {
             return Err(Error::job("five-axis post", format!("move {k}: feed {} cannot be written", m.feed)));
         }

@@ -124,10 +124,14 @@ pub const CENTER_STEP: f64 = 0.00001;
 /// program well inside it; this is the posts' own last check.
 pub const MAX_WORD: f64 = 999_999.0;
 
+/// Whether a post can write `v`: finite and within [`MAX_WORD`].
+pub(crate) fn writable(v: f64) -> bool {
+    v.is_finite() && v.abs() <= MAX_WORD
+}
+
 /// Refuses a toolpath with a number no controller reads as one: not finite, or larger than
 /// [`MAX_WORD`].
 pub fn check_writable(tp: &Toolpath, header: &Header) -> crate::Result<()> {
-    let ok = |v: f64| v.is_finite() && v.abs() <= MAX_WORD;
     let bad = |what: String, v: f64| {
         Err(crate::Error::job(
             "G-code",
@@ -142,7 +146,7 @@ pub fn check_writable(tp: &Toolpath, header: &Header) -> crate::Result<()> {
         ("the start's Y", tp.start.y),
         ("the start's Z", tp.start.z),
     ] {
-        if !ok(v) {
+        if !writable(v) {
             return bad(what.into(), v);
         }
     }
@@ -154,7 +158,7 @@ pub fn check_writable(tp: &Toolpath, header: &Header) -> crate::Result<()> {
         if let Motion::Arc { center, .. } = m.motion {
             words.extend([('I', center.x), ('J', center.y)]);
         }
-        if let Some((w, v)) = words.into_iter().find(|&(_, v)| !ok(v)) {
+        if let Some((w, v)) = words.into_iter().find(|&(_, v)| !writable(v)) {
             return bad(format!("move {}'s {w}", i + 1), v);
         }
     }

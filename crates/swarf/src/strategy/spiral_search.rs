@@ -127,11 +127,6 @@ pub(crate) fn optimise_spiral(cx: &Context, opts: &SpiralOptions) -> Result<(Spi
 /// chooses does not depend on the number of threads.
 pub const ROUND: usize = 2;
 
-/// The cells the tool sweeps along the cutting moves of `tp` on a grid of cells `res` wide.
-fn swept_cells(tp: &Toolpath, d: f64, res: f64, rapid_rate: f64) -> f64 {
-    tp.totals(rapid_rate).cut_length_mm * d / (res * res)
-}
-
 /// `optimise_spiral`, with the program of the choice as planned (without finishing passes) and
 /// its simulation, when it was simulated.
 /// And whether the search stopped at its bounds before it had tried every candidate.
@@ -155,6 +150,7 @@ fn optimise_spiral_planned(
     let mut proofs: Vec<Option<(Replay, Rest, f64)>> = (0..n).map(|_| None).collect();
     let mut trials: Vec<Trial> = candidates.iter().map(|c| Trial { choice: *c, time_min: None, sim: None }).collect();
     let (d, res) = (job.cutting.tool.diameter, cx.sim.res_for(job.cutting.tool.diameter));
+    let mut cells = vec![0.0; n];
     let mut best = None;
     let mut simulated = 0;
     let mut swept = 0.0;
@@ -166,7 +162,10 @@ fn optimise_spiral_planned(
             candidates[round.clone()].par_iter().map(|c| plan_spiral_trial(cx, &fields, opts, c)).collect();
         log::debug!("spiral: candidates {round:?} planned in {:.2} s", t0.elapsed().as_secs_f64());
         for (i, tp) in round.clone().zip(made) {
-            trials[i].time_min = tp.as_ref().map(|(_, written)| written.totals(job.cutting.rapid_rate).time_min);
+            let totals = tp.as_ref().map(|(_, written)| written.totals(job.cutting.rapid_rate));
+            trials[i].time_min = totals.map(|t| t.time_min);
+            // the cells the tool sweeps along its cuts, what simulating it costs
+            cells[i] = totals.map_or(0.0, |t| t.cut_length_mm * d / (res * res));
             planned[i] = tp;
         }
         next = round.end;
@@ -193,7 +192,7 @@ fn optimise_spiral_planned(
             }
             let Some((_, tp)) = &planned[i] else { continue };
             simulated += 1;
-            swept += swept_cells(tp, d, res, job.cutting.rapid_rate);
+            swept += cells[i];
             let t0 = std::time::Instant::now();
             let (sim, (rp, rest)) = judge_spiral(job, cx.regions, cx.sim, tp)?;
             let secs = t0.elapsed().as_secs_f64();
