@@ -48,6 +48,10 @@ enum Cmd {
     /// Draw an implicit shape file (paper 4: R-function shapes in JSON): its zero set, a few
     /// level sets, and optionally the oscillator spiral from its maximum.
     Shape(ShapeArgs),
+    /// Pocket a 5-axis case (a floor and a top as NURBS surfaces, walls, a tilted tool;
+    /// paper 2 §2): write the C¹ toolpath as an APT CL file and, with --gcode, as LinuxCNC
+    /// G-code for the case's table-tilting A/C machine.
+    Five(FiveArgs),
     /// Run the built-in example (a pocket with two islands) and write everything into a folder.
     Demo {
         /// Output folder.
@@ -344,6 +348,24 @@ struct ShapeArgs {
     quiet: bool,
 }
 
+#[derive(Args)]
+struct FiveArgs {
+    /// The 5-axis case (JSON, "kind": "fiveaxis_pocket").
+    input: PathBuf,
+    /// Output CL file.
+    #[arg(short, long, default_value = "five.cl")]
+    output: PathBuf,
+    /// Also write G-code for the case's machine (xyzac-trt, tool-centre-point form) here.
+    #[arg(long)]
+    gcode: Option<PathBuf>,
+    /// The back of each rounded shape as a fraction of its front's radius (1: full circles).
+    #[arg(long, default_value_t = 0.5)]
+    back: f64,
+    /// Print nothing.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
 /// An error that is the user's fault (exit 2) or not (exit 1).
 struct Failure {
     user: bool,
@@ -567,6 +589,7 @@ fn main() -> ExitCode {
     let res = match cli.cmd {
         Cmd::Rough(a) => rough(a),
         Cmd::Plan(a) => plan(a),
+        Cmd::Five(a) => five(a),
         Cmd::Shape(a) => shape(a),
         Cmd::Demo { out_dir, opts } => demo(&out_dir, &opts),
     };
@@ -1228,6 +1251,40 @@ fn shape(a: ShapeArgs) -> Result<(), Failure> {
     output::commit(&[OutputFile::new(&a.output, bytes)], &[&a.input])?;
     if !a.quiet {
         println!("wrote {}", a.output.display());
+    }
+    Ok(())
+}
+
+fn five(a: FiveArgs) -> Result<(), Failure> {
+    use swarf::strategy::five::FiveOptions;
+    let mut outs: Vec<&Path> = vec![&a.output];
+    if let Some(g) = &a.gcode {
+        outs.push(g);
+    }
+    output::check(&outs, &[&a.input])?;
+    let job = swarf::io::five::read_five(&a.input)?;
+    let opts = FiveOptions { back: a.back, ..FiveOptions::default() };
+    let p = swarf::job::five::run(&job, &opts).map_err(|e| e.in_file(&a.input))?;
+    let mut files = vec![OutputFile::new(&a.output, p.cl.clone().into_bytes())];
+    if let Some(g) = &a.gcode {
+        files.push(OutputFile::new(g, p.gcode.clone().into_bytes()));
+    }
+    output::commit(&files, &[&a.input])?;
+    if !a.quiet {
+        println!(
+            "{}: {} shapes, {} moves, cutting {:.0} mm, rapids {:.0} mm, machining {:.2} min, planned in {:.2} s",
+            job.name,
+            p.plan.shapes,
+            p.plan.moves.len(),
+            p.length.0,
+            p.length.1,
+            p.time_min,
+            p.planning_s
+        );
+        println!("least clearance from a wall {:.3} mm", p.plan.wall_clearance);
+        for f in &files {
+            println!("wrote {}", f.path.display());
+        }
     }
     Ok(())
 }

@@ -319,6 +319,34 @@ impl NurbsSurface {
         Ok(NurbsSurface { ku, kv, points: flat, weights, nv })
     }
 
+    /// The same surface with u running the other way: S'(u, v) = S(u0 + u1 − u, v).
+    pub fn reversed_u(&self) -> NurbsSurface {
+        let (a, b) = self.ku.range();
+        let k: Vec<f64> = self.ku.k.iter().rev().map(|&x| a + b - x).collect();
+        let nu = self.points.len() / self.nv;
+        let mut points = Vec::with_capacity(self.points.len());
+        let mut weights = Vec::with_capacity(self.points.len());
+        for i in (0..nu).rev() {
+            points.extend_from_slice(&self.points[i * self.nv..(i + 1) * self.nv]);
+            weights.extend_from_slice(&self.weights[i * self.nv..(i + 1) * self.nv]);
+        }
+        NurbsSurface { ku: Knots { p: self.ku.p, k }, kv: self.kv.clone(), points, weights, nv: self.nv }
+    }
+
+    /// The same surface with u and v exchanged: S'(u, v) = S(v, u).
+    pub fn transposed(&self) -> NurbsSurface {
+        let nu = self.points.len() / self.nv;
+        let mut points = Vec::with_capacity(self.points.len());
+        let mut weights = Vec::with_capacity(self.points.len());
+        for j in 0..self.nv {
+            for i in 0..nu {
+                points.push(self.points[i * self.nv + j]);
+                weights.push(self.weights[i * self.nv + j]);
+            }
+        }
+        NurbsSurface { ku: self.kv.clone(), kv: self.ku.clone(), points, weights, nv: nu }
+    }
+
     /// The parameter domain, ((u0, u1), (v0, v1)).
     pub fn domain(&self) -> ((f64, f64), (f64, f64)) {
         (self.ku.range(), self.kv.range())
@@ -459,6 +487,19 @@ mod tests {
         let weights = (0..n).map(|i| (0..n).map(|j| 1.0 + 0.3 * ((i + 2 * j) % 3) as f64).collect()).collect();
         let k = vec![0.0, 0.0, 0.0, 0.0, 0.4, 1.0, 1.0, 1.0, 1.0];
         NurbsSurface::new(3, 3, k.clone(), k, points, Some(weights)).expect("a valid surface")
+    }
+
+    #[test]
+    fn reversing_and_transposing_move_the_parameters_only() {
+        for s in [wavy(), quarter_cylinder(2.0, 3.0)] {
+            let (r, t) = (s.reversed_u(), s.transposed());
+            for (u, v) in [(0.0, 0.0), (0.13, 0.71), (0.5, 0.5), (0.9, 0.2), (1.0, 1.0)] {
+                assert!((r.eval(u, v).p - s.eval(1.0 - u, v).p).length() < 1e-12);
+                assert!((r.eval(u, v).su + s.eval(1.0 - u, v).su).length() < 1e-9);
+                assert!((t.eval(v, u).p - s.eval(u, v).p).length() < 1e-12);
+                assert!((t.eval(v, u).sv - s.eval(u, v).su).length() < 1e-9);
+            }
+        }
     }
 
     #[test]

@@ -25,6 +25,7 @@ pub mod spiral;
 #[doc(hidden)]
 pub mod spiral_search;
 pub mod zigzag;
+pub mod five;
 
 pub use adaptive::AdaptiveOptions;
 pub use medial::MedialOptions;

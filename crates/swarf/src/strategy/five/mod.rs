@@ -1,0 +1,734 @@
+//! C¹ pocketing of a freeform surface pocket in 5 axes (paper 2, Elber, Cohen, Drake, §2).
+//!
+//! The pocket is the region between a floor S(u, v) and a top T(u, v) over the unit square,
+//! closed by walls on some sides and open on the others ([`crate::model::five`]). The path is
+//! built in the parameter domain and composed through S, as the paper does:
+//!
+//! ```text
+//!   domain (u, v), walls at v = 0 and v = 1          on the floor S(u, v)
+//!        v=1 ───────────────────────────           ╭──╮╭──╮╭──╮
+//!           ╭─────╮╭─────╮                         │  ││  ││  │   rounded shapes, each
+//!   open    │  ·  ││  ·  │ …  → u                   ╰──╯╰──╯╰──╯   composed through S
+//!   u = 0   ╰─────╯╰─────╯                        joined by the boundary segments
+//!        v=0 ───────────────────────────
+//! ```
+//!
+//! 1. **Variable offset (§2.2, Fig. 4).** The tool must stay off the walls. For each wall the
+//!    least offset that keeps the tool (dropped on the floor, its axis from the field) clear
+//!    of it is found by bisection at samples along the wall, smoothed into a C² function of the
+//!    position along the wall; the domain is then mapped so that points on a wall move by the
+//!    full offset and points inside in proportion to their distance from it, the bisector
+//!    between opposite walls staying in place: `v' = a₀(u) + v (1 − a₀(u) − a₁(u))`, and
+//!    `u' = u (1 − b(v))` for a wall at u = 1. The map is C¹ (C²), so it keeps the path C¹.
+//!    Distances are along the floor's parameter lines, which is the geodesic distance where
+//!    those lines cross the walls square; the check after planning catches the rest (below).
+//! 2. **Maximal shapes (§2.1, Fig. 1–2).** In the offset domain, scaled to the floor's mean
+//!    length and width so that a circle there is round on the surface, the medial axis of the
+//!    strip between the walls is its centre line, and the maximal circles along it touch both
+//!    walls. Each is cut as the paper's Fig. 2(c) shape: the front half circle, which cuts,
+//!    and a shorter half ellipse behind it, which returns over cut floor (`back`).
+//! 3. **Hausdorff stepover (§2.1).** Neighbouring shapes are translates, so every point of
+//!    one lies on a segment of the other's translate; the Hausdorff distance on the surface is
+//!    at most the step times the greatest stretch |∂S∘Φ/∂x| over the two shapes, the paper's
+//!    bound `D_h · a_max` with a_max taken along the step. Steps are chosen so that it is at most
+//!    the case's stepover.
+//! 4. **Bridges (§2.2).** The shapes touch the offset boundary, so the paper's boundary
+//!    segments join them: from the bottom of one shape along the wall to the bottom of the
+//!    next. Every junction is tangent in the domain, and S is C¹, so the path is C¹.
+//! 5. **Ends.** The path starts with the tool wholly past the open side (u = 0), in the air
+//!    over the floor's tangent continuation, and cuts in; past an open u = 1 it runs out into
+//!    the air again; before a wall at u = 1 the last shapes' fronts turn into rounded
+//!    rectangles whose corners shrink into the pocket's corners, the Hausdorff distance of two
+//!    of them being `(r − r′)(√2 − 1)`.
+//! 6. **Orientation (§2.3).** The axis is the case's field (V = T − S, or the normal) at the
+//!    point where the axis meets the floor; for a tapered tool it is turned by the taper angle
+//!    q away from the nearest wall at the wall, by `q (d₂ − d₁)/(d₂ + d₁)` between (d₁, d₂
+//!    the distances to the nearest and second-nearest wall), 0 on the bisector.
+//! 7. **Checked.** Every position is checked against the walls (cutter, shank and holder);
+//!    where one is closer than the margin the offset there grows and the path is built again.
+//!    Turns between moves above 2° are split until they are not.
+//!
+//! Links: one rapid from above the start (clearance over T along the axis) down to the start,
+//! in the air past the open side, and one rapid retract along the axis at the end.
+
+mod place;
+
+use crate::error::{Error, Result};
+use crate::geom::nurbs::SurfacePoint;
+use crate::geom::{DVec2, DVec3};
+use crate::model::five::{Boundary, CutterKind, FiveJob, Side};
+use crate::post::five::AxisMove;
+use place::{FloorGrid, Profile, WallCloud, polyline_len};
+use rayon::prelude::*;
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// Options of 5-axis pocketing.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FiveOptions {
+    /// The back of each shape as a fraction of its front's radius: 1 a full circle (Fig. 1),
+    /// less the cut-back shape of Fig. 2(c).
+    pub back: f64,
+    /// The least clearance kept between the tool and a wall, mm.
+    pub margin: f64,
+}
+
+impl Default for FiveOptions {
+    fn default() -> Self {
+        FiveOptions { back: 0.5, margin: 0.03 }
+    }
+}
+
+/// A planned 5-axis pocketing path.
+#[derive(Debug, Clone)]
+pub struct FivePlan {
+    /// The moves: a rapid to the start over the top, one C¹ cut, a rapid retract.
+    pub moves: Vec<AxisMove>,
+    /// The floor's parameters (u, v) of each move (the links' are those of the cut's end).
+    pub params: Vec<DVec2>,
+    /// How many rounded shapes the cut has.
+    pub shapes: usize,
+    /// The least clearance of the tool from a wall over the cut, mm (infinite without walls).
+    pub wall_clearance: f64,
+    /// The floor's stretch bounds (a_min, a_max) over the domain.
+    pub stretch: (f64, f64),
+    /// The offset domain's scale: its length and width, mm.
+    pub scale: (f64, f64),
+}
+
+/// The job turned so that u = 0 is open (the paper's convention), and how to undo it.
+pub struct Canon {
+    /// The turned job.
+    pub job: FiveJob,
+    /// u and v were exchanged.
+    pub transposed: bool,
+    /// u was reversed (after any exchange).
+    pub reversed: bool,
+}
+
+impl Canon {
+    /// `job` turned so that its side u = 0 is open; an error when no side is.
+    pub fn of(job: &FiveJob) -> Result<Canon> {
+        let open = |s: Side| matches!(job.boundary(s), Boundary::Open);
+        let (transposed, reversed) = if open(Side::U0) {
+            (false, false)
+        } else if open(Side::U1) {
+            (false, true)
+        } else if open(Side::V0) {
+            (true, false)
+        } else if open(Side::V1) {
+            (true, true)
+        } else {
+            return Err(Error::job(
+                "boundaries",
+                "every side is a wall: 5-axis pocketing enters from an open side, and this pocket has none",
+            ));
+        };
+        let mut j = job.clone();
+        if transposed {
+            j.floor = j.floor.transposed();
+            j.top = j.top.transposed();
+            let b = job.boundaries.clone();
+            // (a wall's own surface runs along its side in the floor's parameter, which the
+            // exchange keeps)
+            j.boundaries = [b[2].clone(), b[3].clone(), b[0].clone(), b[1].clone()];
+        }
+        if reversed {
+            j.floor = j.floor.reversed_u();
+            j.top = j.top.reversed_u();
+            let b = j.boundaries.clone();
+            let flip = |w: &Boundary| match w {
+                Boundary::Wall(Some(s)) => Boundary::Wall(Some(s.reversed_u())),
+                other => other.clone(),
+            };
+            j.boundaries = [b[1].clone(), b[0].clone(), flip(&b[2]), flip(&b[3])];
+        }
+        Ok(Canon { job: j, transposed, reversed })
+    }
+
+    /// The original job's (u, v) of the turned job's (u, v).
+    pub fn original(&self, p: DVec2) -> DVec2 {
+        let p = if self.reversed { DVec2::new(1.0 - p.x, p.y) } else { p };
+        if self.transposed { DVec2::new(p.y, p.x) } else { p }
+    }
+
+    fn is_wall(&self, s: Side) -> bool {
+        !matches!(self.job.boundary(s), Boundary::Open)
+    }
+}
+
+/// The floor at (u, v), continued past the unit square as its tangent plane (C¹ across the
+/// edge): the point and its first derivatives (the second are those at the edge).
+pub fn at_floor(job: &FiveJob, u: f64, v: f64) -> SurfacePoint {
+    let (cu, cv) = (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0));
+    let mut s = job.floor.eval(cu, cv);
+    s.p += s.su * (u - cu) + s.sv * (v - cv);
+    s
+}
+
+/// The axis field at (u, v), the top and floor continued past the square as their tangent
+/// planes.
+pub fn field_at(job: &FiveJob, u: f64, v: f64) -> DVec3 {
+    let (cu, cv) = (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0));
+    if (cu, cv) == (u, v) {
+        return job.axis_field(u, v);
+    }
+    match job.axis {
+        crate::model::five::AxisRule::Normal => job.floor_normal(cu, cv),
+        crate::model::five::AxisRule::Field => {
+            let s = at_floor(job, u, v);
+            let mut t = job.top.eval(cu, cv);
+            t.p += t.su * (u - cu) + t.sv * (v - cv);
+            let d = t.p - s.p;
+            if d.length() > 1e-12 { d.normalize() } else { job.floor_normal(cu, cv) }
+        }
+    }
+}
+
+/// A smooth function of one parameter: a uniform cubic B-spline over samples (C²), its value
+/// at a sample's place at least the least of the four nearest samples.
+#[derive(Debug, Clone)]
+struct Smooth {
+    t0: f64,
+    h: f64,
+    c: Vec<f64>,
+}
+
+impl Smooth {
+    fn eval(&self, t: f64) -> f64 {
+        let s = (t - self.t0) / self.h;
+        let i = s.floor();
+        let f = s - i;
+        let n = self.c.len() as isize;
+        let c = |k: isize| self.c[k.clamp(0, n - 1) as usize];
+        let i = i as isize;
+        let f2 = f * f;
+        let f3 = f2 * f;
+        (c(i - 1) * (1.0 - f).powi(3)
+            + c(i) * (3.0 * f3 - 6.0 * f2 + 4.0)
+            + c(i + 1) * (-3.0 * f3 + 3.0 * f2 + 3.0 * f + 1.0)
+            + c(i + 2) * f3)
+            / 6.0
+    }
+}
+
+/// The wall offsets, in the floor's parameter: a₀(u) at v = 0, a₁(u) at v = 1, b(v) at u = 1.
+struct Offsets {
+    /// Required offsets at the samples (before smoothing), per side V0, V1, U1.
+    need: [Vec<f64>; 3],
+    smooth: [Smooth; 3],
+}
+
+/// Samples along a wall for its offset.
+const OFFSET_SAMPLES: usize = 96;
+
+impl Offsets {
+    fn new(need: [Vec<f64>; 3]) -> Offsets {
+        let smooth = need.clone().map(|n| {
+            // each control point the greatest need within two samples, so that the spline,
+            // a blend of four neighbours, is at least the need at every sample
+            let m = n.len();
+            let c: Vec<f64> = (0..m)
+                .map(|k| (k.saturating_sub(2)..(k + 3).min(m)).map(|j| n[j]).fold(f64::NEG_INFINITY, f64::max))
+                .collect();
+            Smooth { t0: 0.0, h: 1.0 / (m - 1) as f64, c }
+        });
+        Offsets { need, smooth }
+    }
+}
+
+/// Everything planning needs about the pocket.
+struct Pocket {
+    canon: Canon,
+    prof: Profile,
+    floor: FloorGrid,
+    walls: WallCloud,
+    /// Each wall's base curve (its floor edge), sampled.
+    bases: Vec<(Side, Vec<DVec3>)>,
+    taper: f64,
+}
+
+impl Pocket {
+    /// The tool placed with its axis through o = S(u, v): o, the axis, and how far along the
+    /// axis from o the tip is when the tool rests on the floor.
+    fn place(&self, u: f64, v: f64) -> (DVec3, DVec3, f64) {
+        let job = &self.canon.job;
+        let sp = at_floor(job, u, v);
+        let o = sp.p;
+        let mut a = field_at(job, u, v);
+        if self.taper > 0.0 && !self.bases.is_empty() {
+            let mut d: Vec<(f64, Side)> = self.bases.iter().map(|(s, b)| (dist_polyline(o, b), *s)).collect();
+            d.sort_by(|x, y| x.0.total_cmp(&y.0));
+            let (d1, s1) = d[0];
+            let m = match d.get(1) {
+                Some(&(d2, _)) if d1 + d2 > 1e-12 => (d2 - d1) / (d2 + d1),
+                Some(_) => 0.0,
+                None => 1.0,
+            };
+            // away from the wall: into the pocket across it
+            let inward = match s1 {
+                Side::U0 => sp.su,
+                Side::U1 => -sp.su,
+                Side::V0 => sp.sv,
+                Side::V1 => -sp.sv,
+            };
+            let dir = (inward - a * inward.dot(a)).normalize_or_zero();
+            let phi = self.taper * m;
+            a = (a * phi.cos() + dir * phi.sin()).normalize();
+        }
+        let lam = self.floor.drop(&self.canon, &self.prof, u, v, o, a);
+        // (a hair above the floor, for the refinement's last digits)
+        (o, a, lam + 0.002)
+    }
+
+    /// The least param offset from the wall `side` at `s` along it that keeps the tool
+    /// `margin` clear of that wall.
+    fn need(&self, side: Side, s: f64, margin: f64) -> Result<f64> {
+        let at = |t: f64| match side {
+            Side::V0 => (s, t),
+            Side::V1 => (s, 1.0 - t),
+            Side::U1 => (1.0 - t, s),
+            Side::U0 => (t, s),
+        };
+        let clear = |t: f64| {
+            let (u, v) = at(t);
+            let (o, a, lam) = self.place(u, v);
+            let tip = o + a * lam;
+            self.walls.clearance(&self.prof, tip, a, Some(side)).0
+        };
+        if clear(0.0) >= margin {
+            return Ok(0.0);
+        }
+        let hi = 0.45;
+        if clear(hi) < margin {
+            let (u, v) = at(hi);
+            return Err(Error::job(
+                "tool",
+                format!(
+                    "the tool cannot stand clear of the wall {} near (u, v) = ({u:.3}, {v:.3}): the pocket is too narrow for it, or the axis leans into the wall",
+                    side.key()
+                ),
+            ));
+        }
+        let (mut lo, mut hi) = (0.0, hi);
+        for _ in 0..16 {
+            let mid = 0.5 * (lo + hi);
+            if clear(mid) >= margin { hi = mid } else { lo = mid }
+        }
+        Ok(hi)
+    }
+}
+
+fn dist_polyline(p: DVec3, b: &[DVec3]) -> f64 {
+    b.windows(2)
+        .map(|w| {
+            let d = w[1] - w[0];
+            let t = ((p - w[0]).dot(d) / d.length_squared().max(1e-300)).clamp(0.0, 1.0);
+            (p - (w[0] + d * t)).length()
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// A piece of the path in the scaled offset domain (x along, y across, mm).
+#[derive(Debug, Clone, Copy)]
+enum Piece {
+    Line(DVec2, DVec2),
+    /// centre, radii (x, y), angles from and to
+    Ellipse(DVec2, DVec2, f64, f64),
+}
+
+impl Piece {
+    fn at(&self, t: f64) -> DVec2 {
+        match *self {
+            Piece::Line(a, b) => a.lerp(b, t),
+            Piece::Ellipse(c, r, t0, t1) => {
+                let th = t0 + (t1 - t0) * t;
+                c + DVec2::new(r.x * th.cos(), r.y * th.sin())
+            }
+        }
+    }
+
+    /// Parameters along the piece, from 0 to 1 (0 left out), steps of at most `len` and a
+    /// turn of at most `ang` radians.
+    fn samples(&self, len: f64, ang: f64) -> Vec<f64> {
+        match *self {
+            Piece::Line(a, b) => {
+                let n = ((a - b).length() / len).ceil().max(1.0) as usize;
+                (1..=n).map(|k| k as f64 / n as f64).collect()
+            }
+            Piece::Ellipse(_, r, t0, t1) => {
+                let span = t1 - t0;
+                let mut out = Vec::new();
+                let mut t = 0.0;
+                while t < 1.0 {
+                    let th = t0 + span * t;
+                    let (s, c) = th.sin_cos();
+                    let speed = (r.x * r.x * s * s + r.y * r.y * c * c).sqrt();
+                    let rate = r.x * r.y / (speed * speed).max(1e-300);
+                    let dth = (ang / rate).min(len / speed.max(1e-300));
+                    t = (t + dth / span.abs()).min(1.0);
+                    if 1.0 - t < 1e-3 {
+                        t = 1.0;
+                    }
+                    out.push(t);
+                }
+                out
+            }
+        }
+    }
+}
+
+/// The plan's domain layout: scale and offsets.
+struct Layout {
+    /// Length and width of the scaled domain, mm.
+    x_len: f64,
+    w: f64,
+    offsets: Offsets,
+    walls: [bool; 3],
+}
+
+impl Layout {
+    /// The floor's (u, v) of the scaled domain's (x, y).
+    fn to_floor(&self, q: DVec2) -> DVec2 {
+        let (u, v) = (q.x / self.x_len, q.y / self.w);
+        let b = if self.walls[2] { self.offsets.smooth[2].eval(v) } else { 0.0 };
+        let ue = u * (1.0 - b);
+        let a0 = if self.walls[0] { self.offsets.smooth[0].eval(ue) } else { 0.0 };
+        let a1 = if self.walls[1] { self.offsets.smooth[1].eval(ue) } else { 0.0 };
+        DVec2::new(ue, a0 + v * (1.0 - a0 - a1))
+    }
+}
+
+/// Plans the pocketing of `job`.
+pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
+    let canon = Canon::of(job)?;
+    let j = &canon.job;
+    let prof = Profile::of(&j.tool);
+    let r = prof.radius();
+    if !(opts.back > 0.05 && opts.back <= 1.0) {
+        return Err(Error::job("back", "the back of a shape must be between 0.05 and 1 of its front"));
+    }
+    // the floor's size: mean length along u and width across, greatest stretches
+    let iso_u = |v: f64| polyline_len((0..=128).map(|i| j.floor.eval(i as f64 / 128.0, v).p));
+    let iso_v = |u: f64| polyline_len((0..=64).map(|i| j.floor.eval(u, i as f64 / 64.0).p));
+    let x_len = (0..5).map(|k| iso_u(0.1 + 0.2 * k as f64)).sum::<f64>() / 5.0;
+    let w = (0..9).map(|k| iso_v(0.1 + 0.1 * k as f64)).sum::<f64>() / 9.0;
+    let (mut su_max, mut sv_max, mut su_min) = (0.0f64, 0.0f64, f64::INFINITY);
+    for i in 0..=32 {
+        for k in 0..=32 {
+            let s = j.floor.eval(i as f64 / 32.0, k as f64 / 32.0);
+            su_max = su_max.max(s.su.length());
+            sv_max = sv_max.max(s.sv.length());
+            su_min = su_min.min(s.su.length());
+        }
+    }
+    if !(x_len > 1e-6 && w > 1e-6 && su_min > 1e-9) {
+        return Err(Error::job("floor", "the floor is degenerate (no length or no width)"));
+    }
+    let stretch = j.floor.stretch_bounds(33);
+    let walls = [canon.is_wall(Side::V0), canon.is_wall(Side::V1), canon.is_wall(Side::U1)];
+    // the floor grid: past the open sides as far as the path goes (a shape's width and the tool)
+    let reach_u = (2.0 * w + 2.0 * r + 4.0) / su_min;
+    let ulo = -reach_u;
+    let uhi = if walls[2] { 1.0 } else { 1.0 + reach_u };
+    let vext = (r + 2.0) / sv_max.max(1e-9) * 2.0;
+    let vlo = if walls[0] { 0.0 } else { -vext };
+    let vhi = if walls[1] { 1.0 } else { 1.0 + vext };
+    let floor = FloorGrid::new(&canon, (ulo, uhi), (vlo, vhi), su_max, sv_max);
+    let walls_cloud = WallCloud::new(&canon);
+    let bases: Vec<(Side, Vec<DVec3>)> = Side::ALL
+        .into_iter()
+        .filter(|s| canon.is_wall(*s))
+        .map(|s| (s, (0..=400).map(|i| { let b = s.at(i as f64 / 400.0); j.floor.eval(b.x, b.y).p }).collect()))
+        .collect();
+    let taper = if j.tool.kind == CutterKind::Tapered { j.tool.taper_deg.to_radians() } else { 0.0 };
+    let stepover = j.stepover;
+    let pocket = Pocket { canon, prof, floor, walls: walls_cloud, bases, taper };
+    let j = &pocket.canon.job;
+
+    // 1. the offsets each wall needs, sampled along it
+    let sides = [Side::V0, Side::V1, Side::U1];
+    let mut need: [Vec<f64>; 3] = [vec![0.0; OFFSET_SAMPLES + 1], vec![0.0; OFFSET_SAMPLES + 1], vec![0.0; OFFSET_SAMPLES + 1]];
+    for (k, side) in sides.iter().enumerate() {
+        if !walls[k] {
+            continue;
+        }
+        need[k] = (0..=OFFSET_SAMPLES)
+            .into_par_iter()
+            .map(|i| pocket.need(*side, i as f64 / OFFSET_SAMPLES as f64, opts.margin))
+            .collect::<Result<Vec<f64>>>()?;
+    }
+    let mut layout = Layout { x_len, w, offsets: Offsets::new(need), walls };
+
+    let mut last = None;
+    for _round in 0..5 {
+        let built = build(&pocket, &layout, stepover, opts)?;
+        // 7. the walls: grow the offset where the tool comes too close
+        let mut grown = false;
+        let mut need = layout.offsets.need.clone();
+        for (k, pt) in built.pts.iter().enumerate() {
+            let (c, side) = built.clear[k];
+            if c >= 0.5 * opts.margin {
+                continue;
+            }
+            let Some(side) = side else { continue };
+            let Some(w) = sides.iter().position(|s| *s == side) else { continue };
+            let uv = pt.uv;
+            let sp = at_floor(j, uv.x, uv.y);
+            let (along, across) = if side == Side::U1 { (uv.y, sp.su.length()) } else { (uv.x, sp.sv.length()) };
+            let deficit = (opts.margin - c) / across.max(1e-9) * 1.3 + 1e-4;
+            let i = (along.clamp(0.0, 1.0) * OFFSET_SAMPLES as f64).round() as usize;
+            for n in need[w].iter_mut().take((i + 2).min(OFFSET_SAMPLES) + 1).skip(i.saturating_sub(2)) {
+                *n += deficit;
+            }
+            grown = true;
+        }
+        last = Some(built);
+        if !grown {
+            break;
+        }
+        layout.offsets = Offsets::new(need);
+    }
+    let built = last.expect("one round at least");
+    Ok(finish(&pocket, &layout, built, stretch))
+}
+
+/// One point of the cut.
+#[derive(Debug, Clone, Copy)]
+struct Pt {
+    piece: usize,
+    t: f64,
+    uv: DVec2,
+    o: DVec3,
+    lam: f64,
+    tip: DVec3,
+    axis: DVec3,
+}
+
+/// The half-width of the window over which the tip's height along the axis is smoothed, mm.
+const SMOOTH_HALF: f64 = 0.5;
+
+/// Smooths the tips' heights over the floor along the path: a tool resting on the floor has a
+/// kink in its height wherever its contact jumps (a flat bottom tilting through the floor's
+/// normal), which would be a corner in the path. Each height becomes the greatest within
+/// `SMOOTH_HALF` along the path, then the tent-weighted mean of those over the same window;
+/// every one of them is at least the height there, so the tool never sinks below the floor,
+/// and it rises where the floor has a kink by about a quarter of the window times the change
+/// of slope (a few micrometres).
+fn smooth_heights(pts: &mut [Pt]) {
+    let n = pts.len();
+    let mut s = vec![0.0; n];
+    for k in 1..n {
+        s[k] = s[k - 1] + (pts[k].o - pts[k - 1].o).length();
+    }
+    // the greatest within the window (two pointers over a monotone deque)
+    let mut hi = vec![0.0; n];
+    let mut dq: std::collections::VecDeque<usize> = std::collections::VecDeque::new();
+    let mut right = 0;
+    for k in 0..n {
+        while right < n && s[right] <= s[k] + SMOOTH_HALF {
+            while dq.back().is_some_and(|&b| pts[b].lam <= pts[right].lam) {
+                dq.pop_back();
+            }
+            dq.push_back(right);
+            right += 1;
+        }
+        while dq.front().is_some_and(|&f| s[f] < s[k] - SMOOTH_HALF) {
+            dq.pop_front();
+        }
+        hi[k] = pts[*dq.front().expect("k itself")].lam;
+    }
+    let mut lo = 0;
+    let mut right = 0;
+    for k in 0..n {
+        while s[lo] < s[k] - SMOOTH_HALF {
+            lo += 1;
+        }
+        while right + 1 < n && s[right + 1] <= s[k] + SMOOTH_HALF {
+            right += 1;
+        }
+        let (mut sum, mut wsum) = (0.0, 0.0);
+        for j in lo..=right.max(k) {
+            let w = (SMOOTH_HALF - (s[j] - s[k]).abs()).max(0.0) + 1e-9;
+            sum += w * hi[j];
+            wsum += w;
+        }
+        let p = &mut pts[k];
+        p.tip = p.o + p.axis * (sum / wsum);
+    }
+}
+
+struct Built {
+    pts: Vec<Pt>,
+    clear: Vec<(f64, Option<Side>)>,
+    shapes: usize,
+}
+
+/// Builds the cut for `layout`: shapes, bridges, samples, placements and clearances.
+fn build(pocket: &Pocket, layout: &Layout, stepover: f64, opts: &FiveOptions) -> Result<Built> {
+    let j = &pocket.canon.job;
+    let (x_len, w) = (layout.x_len, layout.w);
+    let rho = 0.5 * w;
+    let r = pocket.prof.radius();
+    let m = |q: DVec2| {
+        let uv = layout.to_floor(q);
+        at_floor(j, uv.x, uv.y).p
+    };
+    // the stretch along x, the greatest over each column of the domain
+    let x_lo = -(2.0 * rho + 2.0 * r + 3.0);
+    let x_hi = x_len + 2.0 * r + 3.0;
+    let col = 0.5;
+    let ncol = ((x_hi - x_lo) / col).ceil() as usize + 1;
+    let sx: Vec<f64> = (0..ncol)
+        .into_par_iter()
+        .map(|c| {
+            let x = x_lo + col * c as f64;
+            (0..=16)
+                .map(|k| {
+                    let y = w * k as f64 / 16.0;
+                    let h = 0.05;
+                    (m(DVec2::new(x + h, y)) - m(DVec2::new(x - h, y))).length() / (2.0 * h)
+                })
+                .fold(0.0f64, f64::max)
+        })
+        .collect();
+    let sx_over = |a: f64, b: f64| -> f64 {
+        let c0 = (((a - x_lo) / col).floor().max(0.0) as usize).min(ncol - 1);
+        let c1 = (((b - x_lo) / col).ceil().max(0.0) as usize).min(ncol - 1);
+        sx[c0..=c1].iter().copied().fold(1e-9, f64::max)
+    };
+    let target = 0.92 * stepover;
+    // 2–3. shape positions: out past the open side, in steps the stretch allows
+    let at0 = sx_over(-1.0, 1.0);
+    let mut xs = vec![-rho - (r + 1.0) / at0];
+    let end = if layout.walls[2] { x_len - rho } else { x_len + (r + 1.0) / sx_over(x_len - 1.0, x_len + 1.0) };
+    loop {
+        let x = *xs.last().expect("a shape");
+        if x >= end - 1e-9 {
+            break;
+        }
+        let mut dx = target / sx_over(x - 1.0, x + rho + 1.0);
+        dx = target / sx_over(x - 1.0, x + dx + rho + 1.0);
+        if xs.len() > 200_000 {
+            return Err(Error::job("stepover", "the pocket needs more than 200 000 shapes at this stepover"));
+        }
+        xs.push((x + dx).min(end.max(x + 1e-6)));
+    }
+    // 5. before a wall at u = 1: the fronts' corners shrink
+    let mut shapes: Vec<(f64, f64)> = xs.iter().map(|&x| (x, rho)).collect();
+    if layout.walls[2] {
+        let x = *xs.last().expect("a shape");
+        let rmin = rho.min(1.0);
+        let mut rk = rho;
+        while rk > rmin + 1e-9 {
+            let dr = target / sx_over(x, x + rho + 1.0).max(1e-9) / (2f64.sqrt() - 1.0);
+            rk = (rk - dr).max(rmin);
+            shapes.push((x, rk));
+        }
+    }
+    // 4. the pieces, C¹ at every junction
+    let back = opts.back * rho;
+    let mut pieces = Vec::new();
+    for (k, &(xc, rk)) in shapes.iter().enumerate() {
+        if rk >= rho - 1e-9 {
+            pieces.push(Piece::Ellipse(DVec2::new(xc, rho), DVec2::splat(rho), -FRAC_PI_2, FRAC_PI_2));
+        } else {
+            let e = xc + rho - rk;
+            pieces.push(Piece::Line(DVec2::new(xc, 0.0), DVec2::new(e, 0.0)));
+            pieces.push(Piece::Ellipse(DVec2::new(e, rk), DVec2::splat(rk), -FRAC_PI_2, 0.0));
+            pieces.push(Piece::Line(DVec2::new(xc + rho, rk), DVec2::new(xc + rho, w - rk)));
+            pieces.push(Piece::Ellipse(DVec2::new(e, w - rk), DVec2::splat(rk), 0.0, FRAC_PI_2));
+            pieces.push(Piece::Line(DVec2::new(e, w), DVec2::new(xc, w)));
+        }
+        pieces.push(Piece::Ellipse(DVec2::new(xc, rho), DVec2::new(back, rho), FRAC_PI_2, 1.5 * PI));
+        if let Some(&(xn, _)) = shapes.get(k + 1)
+            && xn > xc + 1e-9
+        {
+            pieces.push(Piece::Line(DVec2::new(xc, 0.0), DVec2::new(xn, 0.0)));
+        }
+    }
+    let smax = sx.iter().copied().fold(1e-9, f64::max);
+    let seg = 0.4 / smax;
+    let ang = 1.5f64.to_radians();
+    let mut pts: Vec<(usize, f64)> = vec![(0, 0.0)];
+    for (k, p) in pieces.iter().enumerate() {
+        pts.extend(p.samples(seg, ang).into_iter().map(|t| (k, t)));
+    }
+    let place = |(k, t): (usize, f64)| -> Pt {
+        let q = pieces[k].at(t);
+        let uv = layout.to_floor(q);
+        let (o, axis, lam) = pocket.place(uv.x, uv.y);
+        Pt { piece: k, t, uv, o, lam, tip: o + axis * lam, axis }
+    };
+    let mut placed: Vec<Pt> = pts.par_iter().map(|&p| place(p)).collect();
+    smooth_heights(&mut placed);
+    // 7. split the sharper turns
+    for _ in 0..4 {
+        let mut split = vec![false; placed.len()];
+        let mut any = false;
+        for k in 1..placed.len().saturating_sub(1) {
+            let (a, b, c) = (placed[k - 1].tip, placed[k].tip, placed[k + 1].tip);
+            let (d0, d1) = (b - a, c - b);
+            if d0.length() < 1e-9 || d1.length() < 1e-9 {
+                continue;
+            }
+            // (not below 0.02 mm: the rest is the floor's own kinks, which the smoothing rounds)
+            if d0.angle_between(d1) > 2f64.to_radians() && d0.length().min(d1.length()) > 0.02 {
+                split[k] = true;
+                split[k + 1] = true;
+                any = true;
+            }
+        }
+        if !any {
+            break;
+        }
+        let mut want = Vec::new();
+        for k in 1..placed.len() {
+            if split[k] && placed[k].piece == placed[k - 1].piece {
+                let t0 = if placed[k - 1].piece == placed[k].piece { placed[k - 1].t } else { 0.0 };
+                want.push((k, (placed[k].piece, 0.5 * (t0 + placed[k].t))));
+            } else if split[k] && placed[k].t > 0.0 {
+                want.push((k, (placed[k].piece, 0.5 * placed[k].t)));
+            }
+        }
+        let new: Vec<Pt> = want.par_iter().map(|&(_, p)| place(p)).collect();
+        let mut out = Vec::with_capacity(placed.len() + new.len());
+        let mut wi = 0;
+        for (k, p) in placed.iter().enumerate() {
+            while wi < want.len() && want[wi].0 == k {
+                out.push(new[wi]);
+                wi += 1;
+            }
+            out.push(*p);
+        }
+        placed = out;
+        smooth_heights(&mut placed);
+    }
+    let clear: Vec<(f64, Option<Side>)> =
+        placed.par_iter().map(|p| pocket.walls.clearance(&pocket.prof, p.tip, p.axis, None)).collect();
+    Ok(Built { pts: placed, clear, shapes: shapes.len() })
+}
+
+/// The moves of the cut, with the links.
+fn finish(pocket: &Pocket, layout: &Layout, built: Built, stretch: (f64, f64)) -> FivePlan {
+    let j = &pocket.canon.job;
+    let feed = j.feed;
+    let above = |p: &Pt| {
+        let (cu, cv) = (p.uv.x.clamp(0.0, 1.0), p.uv.y.clamp(0.0, 1.0));
+        let depth = (j.top.eval(cu, cv).p - j.floor.eval(cu, cv).p).length();
+        p.tip + p.axis * (depth + j.clearance)
+    };
+    let first = built.pts[0];
+    let last = *built.pts.last().expect("a point");
+    let mut moves = vec![AxisMove { tip: above(&first), axis: first.axis, rapid: true, feed }];
+    let mut params = vec![pocket.canon.original(first.uv)];
+    moves.push(AxisMove { tip: first.tip, axis: first.axis, rapid: true, feed });
+    params.push(pocket.canon.original(first.uv));
+    for p in &built.pts[1..] {
+        moves.push(AxisMove { tip: p.tip, axis: p.axis, rapid: false, feed });
+        params.push(pocket.canon.original(p.uv));
+    }
+    moves.push(AxisMove { tip: above(&last), axis: last.axis, rapid: true, feed });
+    params.push(pocket.canon.original(last.uv));
+    let wall_clearance = built.clear.iter().map(|c| c.0).fold(f64::INFINITY, f64::min);
+    FivePlan { moves, params, shapes: built.shapes, wall_clearance, stretch, scale: (layout.x_len, layout.w) }
+}

@@ -1,0 +1,350 @@
+//! The tool on the pocket: the cutter as a solid of revolution, dropped along its axis onto the
+//! floor, and its clearance from the walls.
+//!
+//! The floor is sampled on a parameter grid about 0.15 mm apart on the surface (continued as
+//! its tangent plane past the open sides, where the tool runs out into the air); a tool whose
+//! axis passes through a floor point is lowered or lifted along the axis until its lower
+//! envelope (flat bottom, corner arc) touches the highest sample under it, and the contact is
+//! refined on the surface itself by a pattern search. The walls are sampled 0.2 mm along and
+//! 0.25 mm up and kept in a uniform grid of cells; the clearance of a tool position is the least
+//! radial distance from the tool's side (cutter, shank, holder) to a wall point within its
+//! height. Neither needs the contact geometry in closed form, so the same code serves flat,
+//! bull-nose, ball and tapered tools on any C¹ floor.
+
+use super::{at_floor, Canon};
+use crate::geom::DVec3;
+use crate::model::five::{Boundary, CutterKind, FiveTool, Side};
+
+/// The tool's profile, z along the axis from the tip.
+#[derive(Debug, Clone, Copy)]
+pub struct Profile {
+    /// The corner radius.
+    rc: f64,
+    /// The flat bottom's radius.
+    rho_c: f64,
+    /// Where the corner meets the side: the bottom's reach.
+    pub foot: f64,
+    r: f64,
+    tan_q: f64,
+    z_corner: f64,
+    flutes: f64,
+    shank: f64,
+    length: f64,
+    holder: Option<(f64, f64)>,
+}
+
+impl Profile {
+    /// The profile of `tool`.
+    pub fn of(tool: &FiveTool) -> Profile {
+        let r = 0.5 * tool.diameter;
+        let q = if tool.kind == CutterKind::Tapered { tool.taper_deg.to_radians() } else { 0.0 };
+        let rc = if tool.kind == CutterKind::Ball { r } else { tool.corner_radius.min(r) };
+        let rho_c = (r + rc * q.tan() - rc / q.cos()).max(0.0);
+        Profile {
+            rc,
+            rho_c,
+            foot: rho_c + rc * q.cos(),
+            r,
+            tan_q: q.tan(),
+            z_corner: rc * (1.0 - q.sin()),
+            flutes: tool.flute_length.min(tool.length.max(tool.flute_length)),
+            shank: 0.5 * tool.shank_diameter,
+            length: tool.length.max(tool.flute_length),
+            holder: tool.holder.map(|(d, l)| (0.5 * d, l)),
+        }
+    }
+
+    /// The height of the tool's lower envelope at `rho` from the axis, if the bottom reaches
+    /// that far.
+    pub fn bottom(&self, rho: f64) -> Option<f64> {
+        if rho <= self.rho_c {
+            Some(0.0)
+        } else if rho <= self.foot {
+            let d = rho - self.rho_c;
+            Some(self.rc - (self.rc * self.rc - d * d).max(0.0).sqrt())
+        } else {
+            None
+        }
+    }
+
+    /// The tool's radius at height `z` (cutter, shank or holder); negative where there is no
+    /// tool.
+    pub fn reach(&self, z: f64) -> f64 {
+        if z < 0.0 {
+            -1.0
+        } else if z <= self.flutes {
+            if z >= self.z_corner {
+                self.r + z * self.tan_q
+            } else {
+                let dz = self.rc - z;
+                self.rho_c + (self.rc * self.rc - dz * dz).max(0.0).sqrt()
+            }
+        } else if z <= self.length {
+            self.shank
+        } else if let Some((hr, hl)) = self.holder
+            && z <= self.length + hl
+        {
+            hr
+        } else {
+            -1.0
+        }
+    }
+
+    /// The widest the cutter and shank get, and the whole tool's length.
+    fn spans(&self) -> (f64, f64) {
+        let cutter = (self.r + self.flutes * self.tan_q).max(self.shank);
+        (cutter, self.length + self.holder.map_or(0.0, |h| h.1))
+    }
+
+    /// The cutter's radius at the tip end (before the corner).
+    pub fn radius(&self) -> f64 {
+        self.r
+    }
+}
+
+/// The floor sampled on a parameter grid (continued past the open sides).
+pub struct FloorGrid {
+    u0: f64,
+    v0: f64,
+    hu: f64,
+    hv: f64,
+    nu: usize,
+    nv: usize,
+    pts: Vec<DVec3>,
+}
+
+/// The floor samples' spacing on the surface, mm.
+const FLOOR_SPACING: f64 = 0.15;
+
+impl FloorGrid {
+    /// The floor of `pocket` over u in `[ulo, uhi]`, v in `[vlo, vhi]`, with `su`, `sv` the
+    /// greatest |S_u|, |S_v|.
+    pub fn new(pocket: &Canon, (ulo, uhi): (f64, f64), (vlo, vhi): (f64, f64), su: f64, sv: f64) -> FloorGrid {
+        use rayon::prelude::*;
+        let nu = (((uhi - ulo) * su / FLOOR_SPACING).ceil() as usize).clamp(2, 6000);
+        let nv = (((vhi - vlo) * sv / FLOOR_SPACING).ceil() as usize).clamp(2, 6000);
+        let hu = (uhi - ulo) / (nu - 1) as f64;
+        let hv = (vhi - vlo) / (nv - 1) as f64;
+        let pts: Vec<DVec3> = (0..nu)
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                (0..nv).map(move |j| at_floor(&pocket.job, ulo + hu * i as f64, vlo + hv * j as f64).p)
+            })
+            .collect();
+        FloorGrid { u0: ulo, v0: vlo, hu, hv, nu, nv, pts }
+    }
+
+    /// The parameter box the grid covers.
+    fn clamp(&self, u: f64, v: f64) -> (f64, f64) {
+        (
+            u.clamp(self.u0, self.u0 + self.hu * (self.nu - 1) as f64),
+            v.clamp(self.v0, self.v0 + self.hv * (self.nv - 1) as f64),
+        )
+    }
+
+    /// How far along `a` a tool whose axis passes through the floor point `o` = S(u, v) must
+    /// be moved so that it rests on the floor: the tip is `o + λ a`.
+    pub fn drop(&self, pocket: &Canon, prof: &Profile, u: f64, v: f64, o: DVec3, a: DVec3) -> f64 {
+        let sp = at_floor(&pocket.job, u, v);
+        let reach = prof.foot + 0.3;
+        let du = reach / (0.6 * sp.su.length().max(1e-9));
+        let dv = reach / (0.6 * sp.sv.length().max(1e-9));
+        let i0 = (((u - du - self.u0) / self.hu).floor().max(0.0)) as usize;
+        let i1 = (((u + du - self.u0) / self.hu).ceil().max(0.0) as usize).min(self.nu - 1);
+        let j0 = (((v - dv - self.v0) / self.hv).floor().max(0.0)) as usize;
+        let j1 = (((v + dv - self.v0) / self.hv).ceil().max(0.0) as usize).min(self.nv - 1);
+        let f = |p: DVec3| -> Option<f64> {
+            let d = p - o;
+            let z = d.dot(a);
+            let rho = (d.length_squared() - z * z).max(0.0).sqrt();
+            prof.bottom(rho).map(|b| z - b)
+        };
+        let mut best: Option<(f64, usize, usize)> = None;
+        for i in i0..=i1 {
+            for j in j0..=j1 {
+                if let Some(h) = f(self.pts[i * self.nv + j])
+                    && best.is_none_or(|b| h > b.0)
+                {
+                    best = Some((h, i, j));
+                }
+            }
+        }
+        let Some((mut h, i, j)) = best else { return 0.0 };
+        // refined on the surface: a pattern search from the best sample
+        let (mut bu, mut bv) = (self.u0 + self.hu * i as f64, self.v0 + self.hv * j as f64);
+        let (mut su, mut sv) = (self.hu, self.hv);
+        for _ in 0..6 {
+            let mut moved = true;
+            let mut k = 0;
+            while moved && k < 8 {
+                moved = false;
+                k += 1;
+                for (di, dj) in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (1.0, 1.0), (-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0)] {
+                    let (cu, cv) = self.clamp(bu + di * su, bv + dj * sv);
+                    if let Some(c) = f(at_floor(&pocket.job, cu, cv).p)
+                        && c > h
+                    {
+                        (h, bu, bv, moved) = (c, cu, cv, true);
+                    }
+                }
+            }
+            su *= 0.5;
+            sv *= 0.5;
+        }
+        h
+    }
+}
+
+/// Wall points in a uniform grid of cells.
+pub struct WallCloud {
+    origin: DVec3,
+    cell: f64,
+    dims: [usize; 3],
+    /// Cell c's points are `idx[start[c]..start[c + 1]]`.
+    start: Vec<u32>,
+    idx: Vec<u32>,
+    pts: Vec<DVec3>,
+    side: Vec<u8>,
+}
+
+/// Wall samples' spacing along the wall and up it, mm.
+const WALL_ALONG: f64 = 0.2;
+const WALL_UP: f64 = 0.25;
+
+impl WallCloud {
+    /// The walls of `pocket`, sampled.
+    pub fn new(pocket: &Canon) -> WallCloud {
+        let job = &pocket.job;
+        let (mut pts, mut side) = (Vec::new(), Vec::new());
+        for s in Side::ALL {
+            if matches!(job.boundary(s), Boundary::Open) {
+                continue;
+            }
+            let w = |a: f64, b: f64| job.wall_point(s, a, b).unwrap_or(DVec3::ZERO);
+            // the wall's size along and up, from a few of its lines
+            let along = (0..=4)
+                .map(|k| polyline_len((0..=64).map(|i| w(i as f64 / 64.0, k as f64 / 4.0))))
+                .fold(0.0f64, f64::max);
+            let up = (0..=8)
+                .map(|k| polyline_len((0..=16).map(|i| w(k as f64 / 8.0, i as f64 / 16.0))))
+                .fold(0.0f64, f64::max);
+            let na = ((along / WALL_ALONG).ceil() as usize).clamp(2, 20_000);
+            let nw = ((up / WALL_UP).ceil() as usize).clamp(2, 4000);
+            for i in 0..=na {
+                for j in 0..=nw {
+                    pts.push(w(i as f64 / na as f64, j as f64 / nw as f64));
+                    side.push(s as u8);
+                }
+            }
+        }
+        let cell = 2.0;
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for p in &pts {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        if pts.is_empty() {
+            lo = DVec3::ZERO;
+            hi = DVec3::ZERO;
+        }
+        let dims = [0, 1, 2].map(|k| (((hi[k] - lo[k]) / cell).floor() as usize + 1).min(4096));
+        let key = |p: DVec3| -> usize {
+            let c = [0, 1, 2].map(|k| (((p[k] - lo[k]) / cell) as usize).min(dims[k] - 1));
+            (c[0] * dims[1] + c[1]) * dims[2] + c[2]
+        };
+        let n = dims[0] * dims[1] * dims[2];
+        let mut count = vec![0u32; n + 1];
+        for p in &pts {
+            count[key(*p) + 1] += 1;
+        }
+        for c in 0..n {
+            count[c + 1] += count[c];
+        }
+        let mut fill = count.clone();
+        let mut idx = vec![0u32; pts.len()];
+        for (k, p) in pts.iter().enumerate() {
+            let c = key(*p);
+            idx[fill[c] as usize] = k as u32;
+            fill[c] += 1;
+        }
+        WallCloud { origin: lo, cell, dims, start: count, idx, pts, side }
+    }
+
+    /// The least clearance between the tool at `tip` with axis `a` and the wall points (of
+    /// `only`, or all walls): the radial distance from the tool's side to the point, negative
+    /// inside the tool; with the side of that point.
+    pub fn clearance(&self, prof: &Profile, tip: DVec3, a: DVec3, only: Option<Side>) -> (f64, Option<Side>) {
+        let mut best = (f64::INFINITY, None);
+        if self.pts.is_empty() {
+            return best;
+        }
+        let (cutter, total) = prof.spans();
+        let mut segs = vec![(0.0, prof.length, cutter)];
+        if let Some((hr, hl)) = prof.holder {
+            segs.push((prof.length, prof.length + hl, hr));
+        }
+        let _ = total;
+        for (z0, z1, r) in segs {
+            let (p0, p1) = (tip + a * z0, tip + a * z1);
+            let pad = r + 0.5;
+            let lo = p0.min(p1) - DVec3::splat(pad) - self.origin;
+            let hi = p0.max(p1) + DVec3::splat(pad) - self.origin;
+            let c0 = [0, 1, 2].map(|k| (lo[k] / self.cell).floor().max(0.0) as usize);
+            let c1 = [0, 1, 2].map(|k| ((hi[k] / self.cell).floor().max(-1.0) as isize).min(self.dims[k] as isize - 1));
+            if (0..3).any(|k| c1[k] < c0[k] as isize) {
+                continue;
+            }
+            let half = self.cell * 0.87;
+            for i in c0[0]..=c1[0] as usize {
+                for j in c0[1]..=c1[1] as usize {
+                    for k in c0[2]..=c1[2] as usize {
+                        let centre = self.origin + DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * self.cell;
+                        // the cell is near the segment?
+                        let t = (centre - p0).dot(a).clamp(0.0, z1 - z0);
+                        if (centre - (p0 + a * t)).length() > pad + half {
+                            continue;
+                        }
+                        let c = (i * self.dims[1] + j) * self.dims[2] + k;
+                        for &pi in &self.idx[self.start[c] as usize..self.start[c + 1] as usize] {
+                            let s = side_of(self.side[pi as usize]);
+                            if only.is_some_and(|o| o != s) {
+                                continue;
+                            }
+                            let d = self.pts[pi as usize] - tip;
+                            let z = d.dot(a);
+                            if z < z0 - 1e-9 || z > z1 {
+                                continue;
+                            }
+                            let r = prof.reach(z);
+                            if r < 0.0 {
+                                continue;
+                            }
+                            let rho = (d.length_squared() - z * z).max(0.0).sqrt();
+                            if rho - r < best.0 {
+                                best = (rho - r, Some(s));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
+fn side_of(k: u8) -> Side {
+    Side::ALL[k as usize]
+}
+
+/// The length of a polyline.
+pub fn polyline_len(pts: impl Iterator<Item = DVec3>) -> f64 {
+    let mut prev: Option<DVec3> = None;
+    let mut len = 0.0;
+    for p in pts {
+        if let Some(q) = prev {
+            len += (p - q).length();
+        }
+        prev = Some(p);
+    }
+    len
+}
