@@ -6,6 +6,7 @@ mod common;
 
 mod cli_errors;
 mod e2e_rs274;
+mod five_cli;
 mod hostile;
 mod plan_report;
 mod programs_golden;

@@ -358,7 +358,14 @@ impl NurbsSurface {
     #[allow(clippy::needless_range_loop)]
     pub fn eval(&self, u: f64, v: f64) -> SurfacePoint {
         let ((u0, u1), (v0, v1)) = self.domain();
-        let (u, v) = (u.clamp(u0, u1), v.clamp(v0, v1));
+        self.eval_continued(u.clamp(u0, u1), v.clamp(v0, v1))
+    }
+
+    /// S at (u, v) as [`NurbsSurface::eval`], but past the domain's edges the edge spans'
+    /// polynomials continued (the way a B-spline evaluator that only clamps the knot span
+    /// extrapolates).
+    #[allow(clippy::needless_range_loop)]
+    pub fn eval_continued(&self, u: f64, v: f64) -> SurfacePoint {
         let (p, q) = (self.ku.p, self.kv.p);
         let (su, sv) = (self.ku.span(u), self.kv.span(v));
         let nu = self.ku.ders(su, u, 2);
@@ -422,7 +429,14 @@ impl NurbsSurface {
                 }
             }
         }
-        let mut uv = best.0;
+        self.closest_point_near(x, best.0)
+    }
+
+    /// The point of the surface closest to `x` in the basin of `start`: Newton's method from
+    /// there, as in [`NurbsSurface::closest_point`] (for a point near one already found).
+    pub fn closest_point_near(&self, x: DVec3, start: DVec2) -> (DVec2, DVec3) {
+        let ((u0, u1), (v0, v1)) = self.domain();
+        let mut uv = DVec2::new(start.x.clamp(u0, u1), start.y.clamp(v0, v1));
         for _ in 0..50 {
             let s = self.eval(uv.x, uv.y);
             let r = s.p - x;

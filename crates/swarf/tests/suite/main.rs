@@ -8,6 +8,7 @@ mod common;
 mod architecture;
 mod determinism;
 mod engagement;
+mod five;
 mod links;
 mod medial;
 mod options;

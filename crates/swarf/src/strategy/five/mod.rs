@@ -51,7 +51,10 @@
 //! Links: one rapid from above the start (clearance over T along the axis) down to the start,
 //! in the air past the open side, and one rapid retract along the axis at the end.
 
+mod check;
 mod place;
+
+pub use check::{FiveCheck, check};
 
 use crate::error::{Error, Result};
 use crate::geom::nurbs::SurfacePoint;
@@ -165,21 +168,30 @@ pub fn at_floor(job: &FiveJob, u: f64, v: f64) -> SurfacePoint {
     s
 }
 
-/// The axis field at (u, v), the top and floor continued past the square as their tangent
-/// planes.
+/// How far past an open side the field is continued, in the parameter.
+pub const FIELD_EXT: f64 = 0.25;
+
+/// The axis field at (u, v). Past an open side, up to [`FIELD_EXT`], the floor's and top's
+/// edge spans are continued as polynomials and the field is taken from them, as a checker
+/// evaluating the surfaces past the edge does; farther out it stays as there; past a wall it
+/// is the wall's edge value.
 pub fn field_at(job: &FiveJob, u: f64, v: f64) -> DVec3 {
-    let (cu, cv) = (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0));
-    if (cu, cv) == (u, v) {
+    let open = |s: Side| matches!(job.boundary(s), Boundary::Open);
+    let lim = |x: f64, lo: Side, hi: Side| {
+        x.clamp(if open(lo) { -FIELD_EXT } else { 0.0 }, if open(hi) { 1.0 + FIELD_EXT } else { 1.0 })
+    };
+    let (u, v) = (lim(u, Side::U0, Side::U1), lim(v, Side::V0, Side::V1));
+    if (0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v) {
         return job.axis_field(u, v);
     }
+    let s = job.floor.eval_continued(u, v);
+    let n = s.normal();
+    let up = job.top.eval_continued(u, v).p - s.p;
+    let n = if n.dot(up) < 0.0 { -n } else { n };
     match job.axis {
-        crate::model::five::AxisRule::Normal => job.floor_normal(cu, cv),
+        crate::model::five::AxisRule::Normal => n,
         crate::model::five::AxisRule::Field => {
-            let s = at_floor(job, u, v);
-            let mut t = job.top.eval(cu, cv);
-            t.p += t.su * (u - cu) + t.sv * (v - cv);
-            let d = t.p - s.p;
-            if d.length() > 1e-12 { d.normalize() } else { job.floor_normal(cu, cv) }
+            if up.length() > 1e-12 { up.normalize() } else { n }
         }
     }
 }
@@ -390,10 +402,26 @@ impl Layout {
     /// The floor's (u, v) of the scaled domain's (x, y).
     fn to_floor(&self, q: DVec2) -> DVec2 {
         let (u, v) = (q.x / self.x_len, q.y / self.w);
-        let b = if self.walls[2] { self.offsets.smooth[2].eval(v) } else { 0.0 };
+        let across = |u: f64| {
+            let a0 = if self.walls[0] { self.offsets.smooth[0].eval(u) } else { 0.0 };
+            let a1 = if self.walls[1] { self.offsets.smooth[1].eval(u) } else { 0.0 };
+            (a0, a1)
+        };
+        // (the end wall's offset was measured at the floor's v: found with the offsets across
+        // at the offset u)
+        let b = if self.walls[2] {
+            // (two fixed-point steps: a smooth function still)
+            let mut b = 0.0;
+            for _ in 0..3 {
+                let (a0, a1) = across(u.min(1.0) * (1.0 - b));
+                b = self.offsets.smooth[2].eval(a0 + v * (1.0 - a0 - a1));
+            }
+            b
+        } else {
+            0.0
+        };
         let ue = u * (1.0 - b);
-        let a0 = if self.walls[0] { self.offsets.smooth[0].eval(ue) } else { 0.0 };
-        let a1 = if self.walls[1] { self.offsets.smooth[1].eval(ue) } else { 0.0 };
+        let (a0, a1) = across(ue);
         DVec2::new(ue, a0 + v * (1.0 - a0 - a1))
     }
 }
@@ -457,6 +485,9 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
             .map(|i| pocket.need(*side, i as f64 / OFFSET_SAMPLES as f64, opts.margin))
             .collect::<Result<Vec<f64>>>()?;
     }
+    for (k, n) in need.iter().enumerate() {
+        log::debug!("five: offsets {:?}: {:?}", sides[k], n.iter().step_by(8).map(|x| (x * 1000.0).round() / 1000.0).collect::<Vec<_>>());
+    }
     let mut layout = Layout { x_len, w, offsets: Offsets::new(need), walls };
 
     let mut last = None;
@@ -465,6 +496,8 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
         // 7. the walls: grow the offset where the tool comes too close
         let mut grown = false;
         let mut need = layout.offsets.need.clone();
+        // (the greatest deficit at each sample, added once)
+        let mut deficits = [vec![0.0f64; OFFSET_SAMPLES + 1], vec![0.0f64; OFFSET_SAMPLES + 1], vec![0.0f64; OFFSET_SAMPLES + 1]];
         for (k, pt) in built.pts.iter().enumerate() {
             let (c, side) = built.clear[k];
             if c >= 0.5 * opts.margin {
@@ -477,10 +510,26 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
             let (along, across) = if side == Side::U1 { (uv.y, sp.su.length()) } else { (uv.x, sp.sv.length()) };
             let deficit = (opts.margin - c) / across.max(1e-9) * 1.3 + 1e-4;
             let i = (along.clamp(0.0, 1.0) * OFFSET_SAMPLES as f64).round() as usize;
-            for n in need[w].iter_mut().take((i + 2).min(OFFSET_SAMPLES) + 1).skip(i.saturating_sub(2)) {
-                *n += deficit;
+            for d in deficits[w].iter_mut().take((i + 2).min(OFFSET_SAMPLES) + 1).skip(i.saturating_sub(2)) {
+                *d = d.max(deficit);
             }
             grown = true;
+        }
+        for (n, d) in need.iter_mut().zip(&deficits) {
+            for (a, b) in n.iter_mut().zip(d) {
+                *a += b;
+            }
+        }
+        let crowded = (0..=OFFSET_SAMPLES).any(|i| need[0][i] + need[1][i] > 0.9) || need[2].iter().any(|&b| b > 0.9);
+        if crowded {
+            return Err(Error::job(
+                "tool",
+                "the tool cannot stand clear of the walls anywhere across the pocket: it is too wide, or the axis leans into the walls",
+            ));
+        }
+        if grown {
+            let worst = built.clear.iter().enumerate().min_by(|a, b| a.1.0.total_cmp(&b.1.0)).map(|(k, c)| (k, c.0, c.1, built.pts[k].uv));
+            log::debug!("five: round {_round}: too close to a wall, worst {worst:?}");
         }
         last = Some(built);
         if !grown {
@@ -578,7 +627,8 @@ fn build(pocket: &Pocket, layout: &Layout, stepover: f64, opts: &FiveOptions) ->
     let x_hi = x_len + 2.0 * r + 3.0;
     let col = 0.5;
     let ncol = ((x_hi - x_lo) / col).ceil() as usize + 1;
-    let sx: Vec<f64> = (0..ncol)
+    // (and the greatest stretch in any direction, for shapes that change other than by a step)
+    let (sx, sa): (Vec<f64>, Vec<f64>) = (0..ncol)
         .into_par_iter()
         .map(|c| {
             let x = x_lo + col * c as f64;
@@ -586,17 +636,23 @@ fn build(pocket: &Pocket, layout: &Layout, stepover: f64, opts: &FiveOptions) ->
                 .map(|k| {
                     let y = w * k as f64 / 16.0;
                     let h = 0.05;
-                    (m(DVec2::new(x + h, y)) - m(DVec2::new(x - h, y))).length() / (2.0 * h)
+                    let mx = (m(DVec2::new(x + h, y)) - m(DVec2::new(x - h, y))) / (2.0 * h);
+                    let my = (m(DVec2::new(x, y + h)) - m(DVec2::new(x, y - h))) / (2.0 * h);
+                    // the greatest singular value of [mx my]
+                    let (e, f, g) = (mx.dot(mx), mx.dot(my), my.dot(my));
+                    let big = (0.5 * (e + g) + (0.25 * (e - g) * (e - g) + f * f).sqrt()).sqrt();
+                    (mx.length(), big)
                 })
-                .fold(0.0f64, f64::max)
+                .fold((0.0f64, 0.0f64), |a, b| (a.0.max(b.0), a.1.max(b.1)))
         })
-        .collect();
-    let sx_over = |a: f64, b: f64| -> f64 {
+        .unzip();
+    let over = |v: &[f64], a: f64, b: f64| -> f64 {
         let c0 = (((a - x_lo) / col).floor().max(0.0) as usize).min(ncol - 1);
         let c1 = (((b - x_lo) / col).ceil().max(0.0) as usize).min(ncol - 1);
-        sx[c0..=c1].iter().copied().fold(1e-9, f64::max)
+        v[c0..=c1].iter().copied().fold(1e-9, f64::max)
     };
-    let target = 0.92 * stepover;
+    let sx_over = |a: f64, b: f64| over(&sx, a, b);
+    let target = 0.8 * stepover;
     // 2–3. shape positions: out past the open side, in steps the stretch allows
     let at0 = sx_over(-1.0, 1.0);
     let mut xs = vec![-rho - (r + 1.0) / at0];
@@ -620,7 +676,7 @@ fn build(pocket: &Pocket, layout: &Layout, stepover: f64, opts: &FiveOptions) ->
         let rmin = rho.min(1.0);
         let mut rk = rho;
         while rk > rmin + 1e-9 {
-            let dr = target / sx_over(x, x + rho + 1.0).max(1e-9) / (2f64.sqrt() - 1.0);
+            let dr = target / over(&sa, x, x + rho + 1.0) / (2f64.sqrt() - 1.0);
             rk = (rk - dr).max(rmin);
             shapes.push((x, rk));
         }
@@ -647,6 +703,7 @@ fn build(pocket: &Pocket, layout: &Layout, stepover: f64, opts: &FiveOptions) ->
         }
     }
     let smax = sx.iter().copied().fold(1e-9, f64::max);
+    log::debug!("five: {} shapes, {} pieces, stretch along x up to {smax:.3}, w {w:.2}, x_len {x_len:.2}", shapes.len(), pieces.len());
     let seg = 0.4 / smax;
     let ang = 1.5f64.to_radians();
     let mut pts: Vec<(usize, f64)> = vec![(0, 0.0)];
@@ -659,6 +716,7 @@ fn build(pocket: &Pocket, layout: &Layout, stepover: f64, opts: &FiveOptions) ->
         let (o, axis, lam) = pocket.place(uv.x, uv.y);
         Pt { piece: k, t, uv, o, lam, tip: o + axis * lam, axis }
     };
+    log::debug!("five: {} points", pts.len());
     let mut placed: Vec<Pt> = pts.par_iter().map(|&p| place(p)).collect();
     smooth_heights(&mut placed);
     // 7. split the sharper turns
@@ -732,3 +790,4 @@ fn finish(pocket: &Pocket, layout: &Layout, built: Built, stretch: (f64, f64)) -
     let wall_clearance = built.clear.iter().map(|c| c.0).fold(f64::INFINITY, f64::min);
     FivePlan { moves, params, shapes: built.shapes, wall_clearance, stretch, scale: (layout.x_len, layout.w) }
 }
+
