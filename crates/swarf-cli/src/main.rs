@@ -361,6 +361,10 @@ struct FiveArgs {
     /// The back of each rounded shape as a fraction of its front's radius (1: full circles).
     #[arg(long, default_value_t = 0.5)]
     back: f64,
+    /// Also draw the path: the domain before and after the offset, the path on the floor and
+    /// the orientation field (.svg, or .png).
+    #[arg(long)]
+    picture: Option<PathBuf>,
     /// Print nothing.
     #[arg(long, short)]
     quiet: bool,
@@ -1261,6 +1265,9 @@ fn five(a: FiveArgs) -> Result<(), Failure> {
     if let Some(g) = &a.gcode {
         outs.push(g);
     }
+    if let Some(p) = &a.picture {
+        outs.push(p);
+    }
     output::check(&outs, &[&a.input])?;
     let job = swarf::io::five::read_five(&a.input)?;
     let opts = FiveOptions { back: a.back, ..FiveOptions::default() };
@@ -1268,6 +1275,27 @@ fn five(a: FiveArgs) -> Result<(), Failure> {
     let mut files = vec![OutputFile::new(&a.output, p.cl.clone().into_bytes())];
     if let Some(g) = &a.gcode {
         files.push(OutputFile::new(g, p.gcode.clone().into_bytes()));
+    }
+    if let Some(path) = &a.picture {
+        use swarf::plot::five::{FivePicture, svg};
+        let tips: Vec<_> = p.plan.moves.iter().map(|m| m.tip).collect();
+        let title = format!(
+            "{}: {} rounded shapes, {:.0} mm of cut, {:.1} min",
+            job.name, p.plan.shapes, p.length.0, p.time_min
+        );
+        let text = svg(&job, &FivePicture {
+                title,
+                before: &p.plan.before,
+                after: &p.plan.params,
+                tips: &tips,
+                shape: &p.plan.shape_of,
+            });
+        let bytes = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+            swarf::plot::png(&text)?
+        } else {
+            text.into_bytes()
+        };
+        files.push(OutputFile::new(path, bytes));
     }
     output::commit(&files, &[&a.input])?;
     if !a.quiet {

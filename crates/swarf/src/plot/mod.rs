@@ -16,6 +16,7 @@ use crate::sim::{Replay, SampleKind, TopView};
 use crate::toolpath::{Motion, Toolpath};
 use std::fmt::Write;
 
+pub mod five;
 pub mod heights;
 pub mod shape;
 

@@ -12,8 +12,9 @@
 //!   the inlet, the outlet rim a wall or open.
 //!
 //! Tools of the three kinds. Each case is made from one seed, as JSON in the case format and
-//! read by swarf's reader, so a failure reproduces from its seed; set `SWARF_FIVE_DUMP=DIR`
-//! to write the cases there and run them with `swarf five`.
+//! read by swarf's reader, so a failure reproduces from its seed. `SWARF_FIVE_CASES=N` runs
+//! seeds 1 to N (4 by default); `SWARF_FIVE_DUMP=DIR` writes the cases there, to run them with
+//! `swarf five` (and `SWARF_FIVE_DUMP_ONLY=1` only writes them).
 
 use crate::common::Rng;
 use serde_json::{Value, json};
@@ -195,6 +196,9 @@ fn random_pockets_pass_swarf_s_own_checks() {
         let text = serde_json::to_string_pretty(&c).expect("json");
         if let Some(dir) = &dump {
             std::fs::write(format!("{dir}/five_random_{seed}.json"), &text).expect("write the case");
+            if std::env::var_os("SWARF_FIVE_DUMP_ONLY").is_some() {
+                continue;
+            }
         }
         let job = match parse_five(std::path::Path::new("random.json"), text.as_bytes()) {
             Ok(j) => j,

@@ -88,8 +88,13 @@ pub struct FivePlan {
     pub moves: Vec<AxisMove>,
     /// The floor's parameters (u, v) of each move (the links' are those of the cut's end).
     pub params: Vec<DVec2>,
+    /// The same points in the domain before the variable offset (the rounded shapes as placed
+    /// between the walls themselves), in the original job's (u, v).
+    pub before: Vec<DVec2>,
     /// How many rounded shapes the cut has.
     pub shapes: usize,
+    /// The rounded shape each move belongs to (with the bridge that follows it).
+    pub shape_of: Vec<u32>,
     /// The least clearance of the tool from a wall over the cut, mm (infinite without walls).
     pub wall_clearance: f64,
     /// The floor's stretch bounds (a_min, a_max) over the domain.
@@ -229,6 +234,9 @@ struct Offsets {
     need: [Vec<f64>; 3],
     smooth: [Smooth; 3],
 }
+
+/// The most points a path may have (about 300 MB of CL file).
+const MAX_POINTS: usize = 5_000_000;
 
 /// Samples along a wall for its offset.
 const OFFSET_SAMPLES: usize = 96;
@@ -546,6 +554,8 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
 struct Pt {
     piece: usize,
     t: f64,
+    /// The point in the domain before the offset, (x / length, y / width).
+    before: DVec2,
     uv: DVec2,
     o: DVec3,
     lam: f64,
@@ -608,6 +618,8 @@ fn smooth_heights(pts: &mut [Pt]) {
 
 struct Built {
     pts: Vec<Pt>,
+    /// The shape of each piece.
+    piece_shape: Vec<u32>,
     clear: Vec<(f64, Option<Side>)>,
     shapes: usize,
 }
@@ -684,7 +696,9 @@ fn build(pocket: &Pocket, layout: &Layout, stepover: f64, opts: &FiveOptions) ->
     // 4. the pieces, C¹ at every junction
     let back = opts.back * rho;
     let mut pieces = Vec::new();
+    let mut piece_shape = Vec::new();
     for (k, &(xc, rk)) in shapes.iter().enumerate() {
+        let first = pieces.len();
         if rk >= rho - 1e-9 {
             pieces.push(Piece::Ellipse(DVec2::new(xc, rho), DVec2::splat(rho), -FRAC_PI_2, FRAC_PI_2));
         } else {
@@ -701,6 +715,7 @@ fn build(pocket: &Pocket, layout: &Layout, stepover: f64, opts: &FiveOptions) ->
         {
             pieces.push(Piece::Line(DVec2::new(xc, 0.0), DVec2::new(xn, 0.0)));
         }
+        piece_shape.extend(std::iter::repeat_n(k as u32, pieces.len() - first));
     }
     let smax = sx.iter().copied().fold(1e-9, f64::max);
     log::debug!("five: {} shapes, {} pieces, stretch along x up to {smax:.3}, w {w:.2}, x_len {x_len:.2}", shapes.len(), pieces.len());
@@ -714,8 +729,14 @@ fn build(pocket: &Pocket, layout: &Layout, stepover: f64, opts: &FiveOptions) ->
         let q = pieces[k].at(t);
         let uv = layout.to_floor(q);
         let (o, axis, lam) = pocket.place(uv.x, uv.y);
-        Pt { piece: k, t, uv, o, lam, tip: o + axis * lam, axis }
+        Pt { piece: k, t, before: DVec2::new(q.x / x_len, q.y / w), uv, o, lam, tip: o + axis * lam, axis }
     };
+    if pts.len() > MAX_POINTS {
+        return Err(Error::job(
+            "stepover",
+            format!("the path would have more than {MAX_POINTS} points: the pocket is too large for this stepover"),
+        ));
+    }
     log::debug!("five: {} points", pts.len());
     let mut placed: Vec<Pt> = pts.par_iter().map(|&p| place(p)).collect();
     smooth_heights(&mut placed);
@@ -763,7 +784,7 @@ fn build(pocket: &Pocket, layout: &Layout, stepover: f64, opts: &FiveOptions) ->
     }
     let clear: Vec<(f64, Option<Side>)> =
         placed.par_iter().map(|p| pocket.walls.clearance(&pocket.prof, p.tip, p.axis, None)).collect();
-    Ok(Built { pts: placed, clear, shapes: shapes.len() })
+    Ok(Built { pts: placed, piece_shape, clear, shapes: shapes.len() })
 }
 
 /// The moves of the cut, with the links.
@@ -778,16 +799,25 @@ fn finish(pocket: &Pocket, layout: &Layout, built: Built, stretch: (f64, f64)) -
     let first = built.pts[0];
     let last = *built.pts.last().expect("a point");
     let mut moves = vec![AxisMove { tip: above(&first), axis: first.axis, rapid: true, feed }];
-    let mut params = vec![pocket.canon.original(first.uv)];
+    let c = &pocket.canon;
+    let mut params = vec![c.original(first.uv)];
+    let mut before = vec![c.original(first.before)];
     moves.push(AxisMove { tip: first.tip, axis: first.axis, rapid: true, feed });
-    params.push(pocket.canon.original(first.uv));
+    params.push(c.original(first.uv));
+    before.push(c.original(first.before));
     for p in &built.pts[1..] {
         moves.push(AxisMove { tip: p.tip, axis: p.axis, rapid: false, feed });
-        params.push(pocket.canon.original(p.uv));
+        params.push(c.original(p.uv));
+        before.push(c.original(p.before));
     }
     moves.push(AxisMove { tip: above(&last), axis: last.axis, rapid: true, feed });
-    params.push(pocket.canon.original(last.uv));
+    params.push(c.original(last.uv));
+    before.push(c.original(last.before));
     let wall_clearance = built.clear.iter().map(|c| c.0).fold(f64::INFINITY, f64::min);
-    FivePlan { moves, params, shapes: built.shapes, wall_clearance, stretch, scale: (layout.x_len, layout.w) }
+    let sh = |p: &Pt| built.piece_shape[p.piece];
+    let mut shape_of = vec![sh(&first), sh(&first)];
+    shape_of.extend(built.pts[1..].iter().map(sh));
+    shape_of.push(sh(&last));
+    FivePlan { moves, params, before, shape_of, shapes: built.shapes, wall_clearance, stretch, scale: (layout.x_len, layout.w) }
 }
 

@@ -121,8 +121,11 @@ impl FloorGrid {
     /// greatest |S_u|, |S_v|.
     pub fn new(pocket: &Canon, (ulo, uhi): (f64, f64), (vlo, vhi): (f64, f64), su: f64, sv: f64) -> FloorGrid {
         use rayon::prelude::*;
-        let nu = (((uhi - ulo) * su / FLOOR_SPACING).ceil() as usize).clamp(2, 6000);
-        let nv = (((vhi - vlo) * sv / FLOOR_SPACING).ceil() as usize).clamp(2, 6000);
+        // (at most about 4 million samples: a larger floor is sampled more coarsely)
+        let (wu, wv) = ((uhi - ulo) * su, (vhi - vlo) * sv);
+        let spacing = FLOOR_SPACING.max((wu * wv / 4e6).sqrt());
+        let nu = ((wu / spacing).ceil() as usize).clamp(2, 4000);
+        let nv = ((wv / spacing).ceil() as usize).clamp(2, 4000);
         let hu = (uhi - ulo) / (nu - 1) as f64;
         let hv = (vhi - vlo) / (nv - 1) as f64;
         let pts: Vec<DVec3> = (0..nu)
@@ -228,8 +231,10 @@ impl WallCloud {
             let up = (0..=8)
                 .map(|k| polyline_len((0..=16).map(|i| w(k as f64 / 8.0, i as f64 / 16.0))))
                 .fold(0.0f64, f64::max);
-            let na = ((along / WALL_ALONG).ceil() as usize).clamp(2, 20_000);
-            let nw = ((up / WALL_UP).ceil() as usize).clamp(2, 4000);
+            // (at most about a million samples a wall)
+            let k = (along * up / (WALL_ALONG * WALL_UP * 1e6)).sqrt().max(1.0);
+            let na = ((along / (WALL_ALONG * k)).ceil() as usize).clamp(2, 4000);
+            let nw = ((up / (WALL_UP * k)).ceil() as usize).clamp(2, 2000);
             for i in 0..=na {
                 for j in 0..=nw {
                     pts.push(w(i as f64 / na as f64, j as f64 / nw as f64));
@@ -237,7 +242,7 @@ impl WallCloud {
                 }
             }
         }
-        let cell = 2.0;
+        let mut cell = 2.0f64;
         let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
         for p in &pts {
             lo = lo.min(*p);
@@ -247,7 +252,10 @@ impl WallCloud {
             lo = DVec3::ZERO;
             hi = DVec3::ZERO;
         }
-        let dims = [0, 1, 2].map(|k| (((hi[k] - lo[k]) / cell).floor() as usize + 1).min(4096));
+        // (cells no smaller than keeps their count to a few million)
+        let span = hi - lo;
+        cell = cell.max((span.x * span.y * span.z / 4e6).cbrt());
+        let dims = [0, 1, 2].map(|k| ((span[k] / cell).floor() as usize + 1).min(2048));
         let key = |p: DVec3| -> usize {
             let c = [0, 1, 2].map(|k| (((p[k] - lo[k]) / cell) as usize).min(dims[k] - 1));
             (c[0] * dims[1] + c[1]) * dims[2] + c[2]
