@@ -1283,13 +1283,10 @@ fn five(a: FiveArgs) -> Result<(), Failure> {
             "{}: {} rounded shapes, {:.0} mm of cut, {:.1} min",
             job.name, p.plan.shapes, p.length.0, p.time_min
         );
-        let text = svg(&job, &FivePicture {
-                title,
-                before: &p.plan.before,
-                after: &p.plan.params,
-                tips: &tips,
-                shape: &p.plan.shape_of,
-            });
+        let text = svg(
+            &job,
+            &FivePicture { title, before: &p.plan.before, after: &p.plan.params, tips: &tips, shape: &p.plan.shape_of },
+        );
         let bytes = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
             swarf::plot::png(&text)?
         } else {

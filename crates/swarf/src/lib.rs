@@ -49,12 +49,13 @@
 //! - [`implicit`]: R-function shapes and oscillator spirals over their level sets (paper 4);
 //! - [`toolpath`]: the move list everything downstream reads;
 //! - [`sim`]: the raster and distance-field material models (engagement, gouges, rest);
-//! - [`post`]: LinuxCNC and GRBL dialects;
+//! - [`post`]: LinuxCNC and GRBL dialects, and the 5-axis CL file and A/C G-code;
 //! - [`io`], [`report`], [`plot`]: readers, the figures and the pictures;
 //! - [`plan`]: entries (helix, ramp, plunge as the last resort), keep-down links, retracts, the
 //!   level driver;
-//! - [`strategy`]: the five clearing strategies;
-//! - [`job`]: rough, z-level and tool-sequence jobs.
+//! - [`strategy`]: the five clearing strategies, and 5-axis pocketing over a NURBS floor
+//!   ([`strategy::five`], paper 2 §2);
+//! - [`job`]: rough, z-level, tool-sequence and 5-axis jobs.
 //!
 //! Progress and timings are logged through the [`log`] crate (`debug` and `trace` levels); a
 //! program that wants them installs a logger.

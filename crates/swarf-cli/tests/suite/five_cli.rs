@@ -127,6 +127,29 @@ fn a_bad_case_is_refused_and_nothing_is_written() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("closed.json") && err.contains("open side"), "{err}");
     assert_eq!(dir.listing(), before, "nothing written");
+    // cases that read but cannot be pocketed: a tool wider than the pocket, a holder that would
+    // reach into the walls, a stepover that would make an endless path
+    for (what, change, needle) in [
+        ("wide", serde_json::json!({"tool": {"type": "ball", "diameter": 100.0}}), "cannot stand clear"),
+        (
+            "stubby",
+            serde_json::json!({"tool": {"type": "ball", "diameter": 5.0, "flute_length": 5.0, "length": 5.0, "holder_diameter": 20, "holder_length": 30}}),
+            "stick-out",
+        ),
+        ("fine", serde_json::json!({"stepover": 0.001}), "stepover"),
+    ] {
+        let mut c: serde_json::Value = serde_json::from_str(&text).expect("json");
+        for (k, val) in change.as_object().expect("an object") {
+            c[k] = val.clone();
+        }
+        let f = dir.write(&format!("{what}.json"), serde_json::to_string(&c).expect("json"));
+        let before = dir.listing();
+        let out = swarf(dir.path(), &["five", f.to_str().expect("utf-8"), "-o", "out.cl", "--gcode", "out.ngc"]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{what}: {err}");
+        assert!(err.contains(&format!("{what}.json")) && err.contains(needle), "{what}: {err}");
+        assert_eq!(dir.listing(), before, "{what}: nothing written");
+    }
     // the output may not replace the input
     let out = swarf(dir.path(), &["five", closed.to_str().expect("utf-8"), "-o", closed.to_str().expect("utf-8")]);
     assert_eq!(out.status.code(), Some(2));

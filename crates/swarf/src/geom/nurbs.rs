@@ -453,15 +453,15 @@ impl NurbsSurface {
                 g / (h00.abs() + h11.abs()).max(1e-300)
             };
             let next = DVec2::new((uv.x - step.x).clamp(u0, u1), (uv.y - step.y).clamp(v0, v1));
-            let moved = (next - uv).length();
-            // (never uphill: halve a step that would be)
+            // (never uphill: halve a step that would be; none found downhill ends the search)
             let mut cand = next;
             let mut k = 0;
             while (self.eval(cand.x, cand.y).p - x).length_squared() > r.length_squared() && k < 30 {
                 cand = uv + (cand - uv) * 0.5;
                 k += 1;
             }
-            uv = cand;
+            let moved = if k == 30 { 0.0 } else { (cand - uv).length() };
+            uv = if k == 30 { uv } else { cand };
             if moved < 1e-14 * (u1 - u0 + v1 - v0) {
                 break;
             }

@@ -64,7 +64,7 @@ pub fn svg(job: &FiveJob, pic: &FivePicture) -> String {
     let mut tallest = 0.0f64;
     // a few shapes drawn bold: every twentieth, and three neighbours in the middle
     let last = pic.shape.iter().copied().max().unwrap_or(0);
-    let bold = |s: u32| s % 20 == 0 || (s + 1..=s + 3).contains(&(last / 2 + 2));
+    let bold = |s: u32| s.is_multiple_of(20) || (s + 1..=s + 3).contains(&(last / 2 + 2));
     // 1–2: the domain, before and after the offset
     let (mut lo, mut hi) = (DVec2::ZERO, DVec2::ONE);
     let inner_of = |v: &'_ [DVec2]| if v.len() > 2 { v[1..v.len() - 1].to_vec() } else { v.to_vec() };
@@ -72,9 +72,10 @@ pub fn svg(job: &FiveJob, pic: &FivePicture) -> String {
         lo = lo.min(*p);
         hi = hi.max(*p);
     }
-    for (k, (pts, what)) in [(pic.before, "domain: shapes between the walls"), (pic.after, "domain: after the variable offset")]
-        .into_iter()
-        .enumerate()
+    for (k, (pts, what)) in
+        [(pic.before, "domain: shapes between the walls"), (pic.after, "domain: after the variable offset")]
+            .into_iter()
+            .enumerate()
     {
         let f = Frame::new(PANEL * k as f64, top, lo, hi);
         square(&mut out, job, &f);
@@ -186,7 +187,11 @@ fn square(out: &mut String, job: &FiveJob, f: &Frame) {
 fn outline(out: &mut String, job: &FiveJob, f: &Frame, edge: &dyn Fn(Side, bool) -> Vec<DVec2>) {
     for s in Side::ALL {
         let wall = !matches!(job.boundary(s), Boundary::Open);
-        let style = if wall { r##"stroke="black" stroke-width="1.6""## } else { r##"stroke="#888" stroke-width="1" stroke-dasharray="5,4""## };
+        let style = if wall {
+            r##"stroke="black" stroke-width="1.6""##
+        } else {
+            r##"stroke="#888" stroke-width="1" stroke-dasharray="5,4""##
+        };
         f.polyline(out, edge(s, false).into_iter(), style);
         if wall {
             f.polyline(out, edge(s, true).into_iter(), r##"stroke="#999" stroke-width="1""##);

@@ -19,13 +19,13 @@
 pub mod adaptive;
 #[doc(hidden)]
 pub mod cleanup;
+pub mod five;
 pub mod medial;
 pub mod offset;
 pub mod spiral;
 #[doc(hidden)]
 pub mod spiral_search;
 pub mod zigzag;
-pub mod five;
 
 pub use adaptive::AdaptiveOptions;
 pub use medial::MedialOptions;

@@ -218,22 +218,31 @@ impl Cloud {
 fn depths(cloud: &Cloud, solid: &Solid, tip: DVec3, a: DVec3) -> (f64, f64) {
     let (mut cut, mut other) = (0.0f64, 0.0f64);
     // the tool in two pieces, each with its own box
-    let pieces = [(0.0, solid.length, solid.widest().min((solid.r + solid.flutes * solid.tan_q).max(solid.shank))), (solid.length, solid.top(), solid.widest())];
+    let pieces = [
+        (0.0, solid.length, solid.widest().min((solid.r + solid.flutes * solid.tan_q).max(solid.shank))),
+        (solid.length, solid.top(), solid.widest()),
+    ];
     for (z0, z1, r) in pieces {
         if z1 <= z0 {
             continue;
         }
-        cloud.near(tip + a * z0, tip + a * z1, r + 0.1, |p| {
-            let d = p - tip;
-            let z = d.dot(a);
-            if z < z0 - 0.5 || z > z1 {
-                return;
-            }
-            let rho = (d.length_squared() - z * z).max(0.0).sqrt();
-            let (c, o) = solid.sd(rho, z);
-            cut = cut.max(-c);
-            other = other.max(-o);
-        });
+        // (in lengths of a few millimetres, each with its own box: a long tilted tool's one
+        // box would hold a wide patch of the floor)
+        let n = ((z1 - z0) / 3.0).ceil().max(1.0) as usize;
+        for c in 0..n {
+            let (c0, c1) = (z0 + (z1 - z0) * c as f64 / n as f64, z0 + (z1 - z0) * (c + 1) as f64 / n as f64);
+            cloud.near(tip + a * c0, tip + a * c1, r + 0.1, |p| {
+                let d = p - tip;
+                let z = d.dot(a);
+                if z < c0 - if c == 0 { 0.5 } else { 0.0 } || z >= c1 && c + 1 < n || z > c1 {
+                    return;
+                }
+                let rho = (d.length_squared() - z * z).max(0.0).sqrt();
+                let (c, o) = solid.sd(rho, z);
+                cut = cut.max(-c);
+                other = other.max(-o);
+            });
+        }
     }
     (cut, other)
 }
@@ -362,7 +371,9 @@ pub fn check(job: &FiveJob, moves: &[AxisMove]) -> FiveCheck {
     // set down on it along the field (and, tapered, turned by q from the nearest wall)
     let q_rad = if job.tool.kind == CutterKind::Tapered { job.tool.taper_deg.to_radians() } else { 0.0 };
     let unreachable = |p: DVec3| -> bool {
-        let Some((d1, k1)) = bases.iter().enumerate().map(|(k, (b, _))| (dist_base(p, b), k)).min_by(|a, b| a.0.total_cmp(&b.0)) else {
+        let Some((d1, k1)) =
+            bases.iter().enumerate().map(|(k, (b, _))| (dist_base(p, b), k)).min_by(|a, b| a.0.total_cmp(&b.0))
+        else {
             return false;
         };
         if d1 > 3.0 * r + 10.0 {
@@ -444,11 +455,10 @@ pub fn check(job: &FiveJob, moves: &[AxisMove]) -> FiveCheck {
     let mut feet = Vec::new();
     let mut last: Option<crate::geom::DVec2> = None;
     for (k, m) in moves.iter().enumerate().filter(|(_, m)| !m.rapid) {
+        // (a tip far from where the last foot was is off the floor, past an open side: the
+        // foot found from there is at the edge, and the check below leaves it out)
         let f = match last {
-            Some(uv) => {
-                let near = job.floor.closest_point_near(m.tip, uv);
-                if (near.1 - m.tip).length() < 2.0 * r + 1.0 { near } else { job.floor.closest_point(m.tip) }
-            }
+            Some(uv) => job.floor.closest_point_near(m.tip, uv),
             None => job.floor.closest_point(m.tip),
         };
         last = Some(f.0);

@@ -173,19 +173,18 @@ pub fn at_floor(job: &FiveJob, u: f64, v: f64) -> SurfacePoint {
     s
 }
 
-/// How far past an open side the field is continued, in the parameter.
-pub const FIELD_EXT: f64 = 0.25;
-
-/// The axis field at (u, v). Past an open side, up to [`FIELD_EXT`], the floor's and top's
-/// edge spans are continued as polynomials and the field is taken from them, as a checker
-/// evaluating the surfaces past the edge does; farther out it stays as there; past a wall it
-/// is the wall's edge value.
-pub fn field_at(job: &FiveJob, u: f64, v: f64) -> DVec3 {
+/// The axis field at (u, v). Past an open side, within `reach` (in the parameter: the tool's
+/// radius and a millimetre), the floor's and top's edge spans are continued as polynomials and
+/// the field is taken from them, as a checker evaluating the surfaces past the edge does (the
+/// tool there still stands partly over the floor); farther out, where the tool is wholly in the
+/// air, it stays as it is at that distance (continued surfaces turn over within a shape's width
+/// of a curved edge). Past a wall it is the wall's edge value.
+pub fn field_at(job: &FiveJob, u: f64, v: f64, reach: DVec2) -> DVec3 {
     let open = |s: Side| matches!(job.boundary(s), Boundary::Open);
-    let lim = |x: f64, lo: Side, hi: Side| {
-        x.clamp(if open(lo) { -FIELD_EXT } else { 0.0 }, if open(hi) { 1.0 + FIELD_EXT } else { 1.0 })
+    let lim = |x: f64, lo: Side, hi: Side, r: f64| {
+        x.clamp(if open(lo) { -r } else { 0.0 }, if open(hi) { 1.0 + r } else { 1.0 })
     };
-    let (u, v) = (lim(u, Side::U0, Side::U1), lim(v, Side::V0, Side::V1));
+    let (u, v) = (lim(u, Side::U0, Side::U1, reach.x), lim(v, Side::V0, Side::V1, reach.y));
     if (0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v) {
         return job.axis_field(u, v);
     }
@@ -196,7 +195,11 @@ pub fn field_at(job: &FiveJob, u: f64, v: f64) -> DVec3 {
     match job.axis {
         crate::model::five::AxisRule::Normal => n,
         crate::model::five::AxisRule::Field => {
-            if up.length() > 1e-12 { up.normalize() } else { n }
+            if up.length() > 1e-12 {
+                up.normalize()
+            } else {
+                n
+            }
         }
     }
 }
@@ -265,6 +268,8 @@ struct Pocket {
     /// Each wall's base curve (its floor edge), sampled.
     bases: Vec<(Side, Vec<DVec3>)>,
     taper: f64,
+    /// How far past an open side the field follows the continued surfaces, in u and v.
+    reach: DVec2,
 }
 
 impl Pocket {
@@ -274,7 +279,7 @@ impl Pocket {
         let job = &self.canon.job;
         let sp = at_floor(job, u, v);
         let o = sp.p;
-        let mut a = field_at(job, u, v);
+        let mut a = field_at(job, u, v, self.reach);
         if self.taper > 0.0 && !self.bases.is_empty() {
             let mut d: Vec<(f64, Side)> = self.bases.iter().map(|(s, b)| (dist_polyline(o, b), *s)).collect();
             d.sort_by(|x, y| x.0.total_cmp(&y.0));
@@ -324,7 +329,7 @@ impl Pocket {
             return Err(Error::job(
                 "tool",
                 format!(
-                    "the tool cannot stand clear of the wall {} near (u, v) = ({u:.3}, {v:.3}): the pocket is too narrow for it, or the axis leans into the wall",
+                    "the tool (cutter, shank or holder) cannot stand clear of the wall {} near (u, v) = ({u:.3}, {v:.3}): the pocket is too narrow for it, its stick-out too short, or the axis leans into the wall",
                     side.key()
                 ),
             ));
@@ -448,16 +453,17 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
     let iso_v = |u: f64| polyline_len((0..=64).map(|i| j.floor.eval(u, i as f64 / 64.0).p));
     let x_len = (0..5).map(|k| iso_u(0.1 + 0.2 * k as f64)).sum::<f64>() / 5.0;
     let w = (0..9).map(|k| iso_v(0.1 + 0.1 * k as f64)).sum::<f64>() / 9.0;
-    let (mut su_max, mut sv_max, mut su_min) = (0.0f64, 0.0f64, f64::INFINITY);
+    let (mut su_max, mut sv_max, mut su_min, mut sv_min) = (0.0f64, 0.0f64, f64::INFINITY, f64::INFINITY);
     for i in 0..=32 {
         for k in 0..=32 {
             let s = j.floor.eval(i as f64 / 32.0, k as f64 / 32.0);
             su_max = su_max.max(s.su.length());
             sv_max = sv_max.max(s.sv.length());
             su_min = su_min.min(s.su.length());
+            sv_min = sv_min.min(s.sv.length());
         }
     }
-    if !(x_len > 1e-6 && w > 1e-6 && su_min > 1e-9) {
+    if !(x_len > 1e-6 && w > 1e-6 && su_min > 1e-9 && sv_min > 1e-9) {
         return Err(Error::job("floor", "the floor is degenerate (no length or no width)"));
     }
     let stretch = j.floor.stretch_bounds(33);
@@ -474,16 +480,28 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
     let bases: Vec<(Side, Vec<DVec3>)> = Side::ALL
         .into_iter()
         .filter(|s| canon.is_wall(*s))
-        .map(|s| (s, (0..=400).map(|i| { let b = s.at(i as f64 / 400.0); j.floor.eval(b.x, b.y).p }).collect()))
+        .map(|s| {
+            (
+                s,
+                (0..=400)
+                    .map(|i| {
+                        let b = s.at(i as f64 / 400.0);
+                        j.floor.eval(b.x, b.y).p
+                    })
+                    .collect(),
+            )
+        })
         .collect();
     let taper = if j.tool.kind == CutterKind::Tapered { j.tool.taper_deg.to_radians() } else { 0.0 };
     let stepover = j.stepover;
-    let pocket = Pocket { canon, prof, floor, walls: walls_cloud, bases, taper };
+    let reach = DVec2::new((r + 1.0) / su_min, (r + 1.0) / sv_min);
+    let pocket = Pocket { canon, prof, floor, walls: walls_cloud, bases, taper, reach };
     let j = &pocket.canon.job;
 
     // 1. the offsets each wall needs, sampled along it
     let sides = [Side::V0, Side::V1, Side::U1];
-    let mut need: [Vec<f64>; 3] = [vec![0.0; OFFSET_SAMPLES + 1], vec![0.0; OFFSET_SAMPLES + 1], vec![0.0; OFFSET_SAMPLES + 1]];
+    let mut need: [Vec<f64>; 3] =
+        [vec![0.0; OFFSET_SAMPLES + 1], vec![0.0; OFFSET_SAMPLES + 1], vec![0.0; OFFSET_SAMPLES + 1]];
     for (k, side) in sides.iter().enumerate() {
         if !walls[k] {
             continue;
@@ -494,7 +512,11 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
             .collect::<Result<Vec<f64>>>()?;
     }
     for (k, n) in need.iter().enumerate() {
-        log::debug!("five: offsets {:?}: {:?}", sides[k], n.iter().step_by(8).map(|x| (x * 1000.0).round() / 1000.0).collect::<Vec<_>>());
+        log::debug!(
+            "five: offsets {:?}: {:?}",
+            sides[k],
+            n.iter().step_by(8).map(|x| (x * 1000.0).round() / 1000.0).collect::<Vec<_>>()
+        );
     }
     let mut layout = Layout { x_len, w, offsets: Offsets::new(need), walls };
 
@@ -505,7 +527,8 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
         let mut grown = false;
         let mut need = layout.offsets.need.clone();
         // (the greatest deficit at each sample, added once)
-        let mut deficits = [vec![0.0f64; OFFSET_SAMPLES + 1], vec![0.0f64; OFFSET_SAMPLES + 1], vec![0.0f64; OFFSET_SAMPLES + 1]];
+        let mut deficits =
+            [vec![0.0f64; OFFSET_SAMPLES + 1], vec![0.0f64; OFFSET_SAMPLES + 1], vec![0.0f64; OFFSET_SAMPLES + 1]];
         for (k, pt) in built.pts.iter().enumerate() {
             let (c, side) = built.clear[k];
             if c >= 0.5 * opts.margin {
@@ -528,16 +551,21 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
                 *a += b;
             }
         }
+        if grown {
+            let worst = built
+                .clear
+                .iter()
+                .enumerate()
+                .min_by(|a, b| a.1.0.total_cmp(&b.1.0))
+                .map(|(k, c)| (k, c.0, c.1, built.pts[k].uv));
+            log::debug!("five: round {_round}: too close to a wall, worst {worst:?}");
+        }
         let crowded = (0..=OFFSET_SAMPLES).any(|i| need[0][i] + need[1][i] > 0.9) || need[2].iter().any(|&b| b > 0.9);
         if crowded {
             return Err(Error::job(
                 "tool",
                 "the tool cannot stand clear of the walls anywhere across the pocket: it is too wide, or the axis leans into the walls",
             ));
-        }
-        if grown {
-            let worst = built.clear.iter().enumerate().min_by(|a, b| a.1.0.total_cmp(&b.1.0)).map(|(k, c)| (k, c.0, c.1, built.pts[k].uv));
-            log::debug!("five: round {_round}: too close to a wall, worst {worst:?}");
         }
         last = Some(built);
         if !grown {
@@ -718,7 +746,11 @@ fn build(pocket: &Pocket, layout: &Layout, stepover: f64, opts: &FiveOptions) ->
         piece_shape.extend(std::iter::repeat_n(k as u32, pieces.len() - first));
     }
     let smax = sx.iter().copied().fold(1e-9, f64::max);
-    log::debug!("five: {} shapes, {} pieces, stretch along x up to {smax:.3}, w {w:.2}, x_len {x_len:.2}", shapes.len(), pieces.len());
+    log::debug!(
+        "five: {} shapes, {} pieces, stretch along x up to {smax:.3}, w {w:.2}, x_len {x_len:.2}",
+        shapes.len(),
+        pieces.len()
+    );
     let seg = 0.4 / smax;
     let ang = 1.5f64.to_radians();
     let mut pts: Vec<(usize, f64)> = vec![(0, 0.0)];
@@ -818,6 +850,129 @@ fn finish(pocket: &Pocket, layout: &Layout, built: Built, stretch: (f64, f64)) -
     let mut shape_of = vec![sh(&first), sh(&first)];
     shape_of.extend(built.pts[1..].iter().map(sh));
     shape_of.push(sh(&last));
-    FivePlan { moves, params, before, shape_of, shapes: built.shapes, wall_clearance, stretch, scale: (layout.x_len, layout.w) }
+    FivePlan {
+        moves,
+        params,
+        before,
+        shape_of,
+        shapes: built.shapes,
+        wall_clearance,
+        stretch,
+        scale: (layout.x_len, layout.w),
+    }
 }
 
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::nurbs::NurbsSurface;
+    use crate::model::five::{AxisRule, FiveTool, Machine};
+
+    /// A flat floor `len` × `width` at z = 0 (u along x, v along y), the top `h` above it: a
+    /// straight channel with vertical walls at v = 0 and v = 1.
+    fn flat_channel(len: f64, width: f64, h: f64, tool: FiveTool) -> FiveJob {
+        let plane = |z: f64| {
+            let k = vec![0.0, 0.0, 1.0, 1.0];
+            let p = vec![
+                vec![DVec3::new(0.0, 0.0, z), DVec3::new(0.0, width, z)],
+                vec![DVec3::new(len, 0.0, z), DVec3::new(len, width, z)],
+            ];
+            NurbsSurface::new(1, 1, k.clone(), k, p, None).expect("a plane")
+        };
+        FiveJob {
+            name: "flat".into(),
+            floor: plane(0.0),
+            top: plane(h),
+            boundaries: [Boundary::Open, Boundary::Open, Boundary::Wall(None), Boundary::Wall(None)],
+            tool,
+            axis: AxisRule::Field,
+            stepover: 0.5,
+            scallop_tol: 0.02,
+            wall_band_margin: 0.5,
+            clearance: 5.0,
+            feed: 1000.0,
+            rapid_rate: 5000.0,
+            machine: Machine::default(),
+        }
+    }
+
+    fn ball(d: f64) -> FiveTool {
+        FiveTool {
+            kind: CutterKind::Ball,
+            diameter: d,
+            corner_radius: 0.5 * d,
+            taper_deg: 0.0,
+            flute_length: 20.0,
+            shank_diameter: d,
+            length: 30.0,
+            holder: None,
+        }
+    }
+
+    #[test]
+    fn the_smoothed_offset_is_never_under_the_need_at_a_sample() {
+        let need: Vec<f64> = (0..=40).map(|i| if i == 17 { 0.3 } else { 0.1 + 0.001 * i as f64 }).collect();
+        let o = Offsets::new([need.clone(), need.clone(), need.clone()]);
+        for (i, n) in need.iter().enumerate() {
+            assert!(o.smooth[0].eval(i as f64 / 40.0) >= n - 1e-12, "sample {i}");
+        }
+    }
+
+    #[test]
+    fn a_flat_channel_is_cut_flat_clear_of_the_walls_and_c1() {
+        let job = flat_channel(40.0, 16.0, 10.0, ball(6.0));
+        let p = plan(&job, &FiveOptions::default()).expect("planned");
+        let cut: Vec<&AxisMove> = p.moves.iter().filter(|m| !m.rapid).collect();
+        // on a flat floor with a vertical field the ball's tip rests on it
+        for m in &cut {
+            assert!((m.axis - DVec3::Z).length() < 1e-9);
+            assert!(m.tip.z > -1e-9 && m.tip.z < 0.01, "tip at z {}", m.tip.z);
+            // the walls are at y = 0 and y = 16: the ball stays its radius and the margin away
+            assert!(m.tip.y >= 3.0 + 0.02 && m.tip.y <= 13.0 - 0.02, "tip at y {}", m.tip.y);
+        }
+        // it reaches the walls' band and runs out past both open ends
+        let (lo, hi) = cut.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, m| (a.0.min(m.tip.y), a.1.max(m.tip.y)));
+        assert!(lo < 3.1 && hi > 12.9, "y from {lo} to {hi}");
+        let (x0, x1) = cut.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, m| (a.0.min(m.tip.x), a.1.max(m.tip.x)));
+        assert!(x0 < -3.0 && x1 > 43.0, "x from {x0} to {x1}");
+        let r = check(&job, &p.moves);
+        assert!(r.failures().is_empty(), "{:?}: {r:?}", r.failures());
+        assert!(r.max_turn_deg < 3.0);
+        // the shapes' fronts step at most the stepover along the channel: the tips crossing
+        // the middle line going forward (the fronts) are that close
+        let mut fronts: Vec<f64> =
+            cut.windows(2).filter(|w| w[0].tip.y < 8.0 && w[1].tip.y >= 8.0).map(|w| w[1].tip.x).collect();
+        fronts.sort_by(f64::total_cmp);
+        let gaps = fronts.windows(2).map(|w| w[1] - w[0]).filter(|g| *g > 1e-6).fold(0.0, f64::max);
+        assert!(gaps <= 0.5 + 1e-6, "fronts {gaps} mm apart");
+    }
+
+    #[test]
+    fn a_pocket_open_only_at_u1_or_v0_is_turned_and_entered_there() {
+        let mut job = flat_channel(30.0, 16.0, 10.0, ball(6.0));
+        job.boundaries = [Boundary::Wall(None), Boundary::Open, Boundary::Wall(None), Boundary::Wall(None)];
+        let c = Canon::of(&job).expect("turned");
+        assert!(c.reversed && !c.transposed);
+        assert_eq!(c.original(DVec2::new(0.25, 0.5)), DVec2::new(0.75, 0.5));
+        let p = plan(&job, &FiveOptions::default()).expect("planned");
+        // it starts past u = 1 (x = 30), in the air
+        assert!(p.moves[1].tip.x > 30.0, "{:?}", p.moves[1].tip);
+        let r = check(&job, &p.moves);
+        assert!(r.failures().is_empty(), "{:?}", r.failures());
+        job.boundaries = [Boundary::Wall(None), Boundary::Wall(None), Boundary::Open, Boundary::Wall(None)];
+        let c = Canon::of(&job).expect("turned");
+        assert!(c.transposed && !c.reversed);
+        assert_eq!(c.original(DVec2::new(0.25, 0.75)), DVec2::new(0.75, 0.25));
+        let p = plan(&job, &FiveOptions::default()).expect("planned");
+        assert!(p.moves[1].tip.y < 0.0, "{:?}", p.moves[1].tip);
+        job.boundaries = [Boundary::Wall(None), Boundary::Wall(None), Boundary::Wall(None), Boundary::Wall(None)];
+        assert!(plan(&job, &FiveOptions::default()).is_err());
+    }
+
+    #[test]
+    fn a_tool_wider_than_the_pocket_is_refused() {
+        let job = flat_channel(30.0, 8.0, 10.0, ball(10.0));
+        let e = plan(&job, &FiveOptions::default()).expect_err("too wide");
+        assert!(e.to_string().contains("too narrow") || e.to_string().contains("too wide"), "{e}");
+    }
+}

@@ -1,7 +1,7 @@
 //! The tool on the pocket: the cutter as a solid of revolution, dropped along its axis onto the
 //! floor, and its clearance from the walls.
 //!
-//! The floor is sampled on a parameter grid about 0.15 mm apart on the surface (continued as
+//! The floor is sampled on a parameter grid about 0.25 mm apart on the surface (continued as
 //! its tangent plane past the open sides, where the tool runs out into the air); a tool whose
 //! axis passes through a floor point is lowered or lifted along the axis until its lower
 //! envelope (flat bottom, corner arc) touches the highest sample under it, and the contact is
@@ -11,7 +11,7 @@
 //! height. Neither needs the contact geometry in closed form, so the same code serves flat,
 //! bull-nose, ball and tapered tools on any C¹ floor.
 
-use super::{at_floor, Canon};
+use super::{Canon, at_floor};
 use crate::geom::DVec3;
 use crate::model::five::{Boundary, CutterKind, FiveTool, Side};
 
@@ -114,7 +114,7 @@ pub struct FloorGrid {
 }
 
 /// The floor samples' spacing on the surface, mm.
-const FLOOR_SPACING: f64 = 0.15;
+const FLOOR_SPACING: f64 = 0.25;
 
 impl FloorGrid {
     /// The floor of `pocket` over u in `[ulo, uhi]`, v in `[vlo, vhi]`, with `su`, `sv` the
@@ -130,9 +130,7 @@ impl FloorGrid {
         let hv = (vhi - vlo) / (nv - 1) as f64;
         let pts: Vec<DVec3> = (0..nu)
             .into_par_iter()
-            .flat_map_iter(|i| {
-                (0..nv).map(move |j| at_floor(&pocket.job, ulo + hu * i as f64, vlo + hv * j as f64).p)
-            })
+            .flat_map_iter(|i| (0..nv).map(move |j| at_floor(&pocket.job, ulo + hu * i as f64, vlo + hv * j as f64).p))
             .collect();
         FloorGrid { u0: ulo, v0: vlo, hu, hv, nu, nv, pts }
     }
@@ -150,8 +148,8 @@ impl FloorGrid {
     pub fn drop(&self, pocket: &Canon, prof: &Profile, u: f64, v: f64, o: DVec3, a: DVec3) -> f64 {
         let sp = at_floor(&pocket.job, u, v);
         let reach = prof.foot + 0.3;
-        let du = reach / (0.6 * sp.su.length().max(1e-9));
-        let dv = reach / (0.6 * sp.sv.length().max(1e-9));
+        let du = reach / (0.75 * sp.su.length().max(1e-9));
+        let dv = reach / (0.75 * sp.sv.length().max(1e-9));
         let i0 = (((u - du - self.u0) / self.hu).floor().max(0.0)) as usize;
         let i1 = (((u + du - self.u0) / self.hu).ceil().max(0.0) as usize).min(self.nu - 1);
         let j0 = (((v - dv - self.v0) / self.hv).floor().max(0.0)) as usize;
@@ -162,9 +160,13 @@ impl FloorGrid {
             let rho = (d.length_squared() - z * z).max(0.0).sqrt();
             prof.bottom(rho).map(|b| z - b)
         };
+        // (where the floor is less stretched than at its most, the grid is denser than it
+        // needs to be here: every few samples will do)
+        let si = ((FLOOR_SPACING / (sp.su.length() * self.hu).max(1e-12)).floor() as usize).clamp(1, 64);
+        let sj = ((FLOOR_SPACING / (sp.sv.length() * self.hv).max(1e-12)).floor() as usize).clamp(1, 64);
         let mut best: Option<(f64, usize, usize)> = None;
-        for i in i0..=i1 {
-            for j in j0..=j1 {
+        for i in (i0..=i1).step_by(si) {
+            for j in (j0..=j1).step_by(sj) {
                 if let Some(h) = f(self.pts[i * self.nv + j])
                     && best.is_none_or(|b| h > b.0)
                 {
@@ -182,7 +184,16 @@ impl FloorGrid {
             while moved && k < 8 {
                 moved = false;
                 k += 1;
-                for (di, dj) in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (1.0, 1.0), (-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0)] {
+                for (di, dj) in [
+                    (1.0, 0.0),
+                    (-1.0, 0.0),
+                    (0.0, 1.0),
+                    (0.0, -1.0),
+                    (1.0, 1.0),
+                    (-1.0, -1.0),
+                    (1.0, -1.0),
+                    (-1.0, 1.0),
+                ] {
                     let (cu, cv) = self.clamp(bu + di * su, bv + dj * sv);
                     if let Some(c) = f(at_floor(&pocket.job, cu, cv).p)
                         && c > h
@@ -306,7 +317,8 @@ impl WallCloud {
             for i in c0[0]..=c1[0] as usize {
                 for j in c0[1]..=c1[1] as usize {
                     for k in c0[2]..=c1[2] as usize {
-                        let centre = self.origin + DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * self.cell;
+                        let centre =
+                            self.origin + DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * self.cell;
                         // the cell is near the segment?
                         let t = (centre - p0).dot(a).clamp(0.0, z1 - z0);
                         if (centre - (p0 + a * t)).length() > pad + half {
