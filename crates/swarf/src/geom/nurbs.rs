@@ -355,7 +355,6 @@ impl NurbsSurface {
     /// S and its partial derivatives to the second order at (u, v) (clamped to the domain).
     // (the indices are the algorithm's: basis functions i, j weigh control point
     // (s_u − p + i, s_v − q + j))
-    #[allow(clippy::needless_range_loop)]
     pub fn eval(&self, u: f64, v: f64) -> SurfacePoint {
         let ((u0, u1), (v0, v1)) = self.domain();
         self.eval_continued(u.clamp(u0, u1), v.clamp(v0, v1))
@@ -513,6 +512,19 @@ mod tests {
                 assert!((t.eval(v, u).p - s.eval(u, v).p).length() < 1e-12);
                 assert!((t.eval(v, u).sv - s.eval(u, v).su).length() < 1e-9);
             }
+        }
+    }
+
+    #[test]
+    fn the_continuation_past_the_edge_is_the_edge_span_s_polynomial() {
+        let s = wavy();
+        for v in [0.0, 0.3, 0.8] {
+            // the same inside, and C¹ across the edge: a step out matches the derivative there
+            assert_eq!(s.eval_continued(0.4, v).p, s.eval(0.4, v).p);
+            let (e, h) = (s.eval(0.0, v), 1e-5);
+            let out = s.eval_continued(-h, v);
+            assert!((out.p - (e.p - e.su * h)).length() < 1e-6, "{v}");
+            assert!((out.su - e.su).length() < 1e-3 * e.su.length().max(1.0));
         }
     }
 

@@ -31,7 +31,8 @@
 //!    one lies on a segment of the other's translate; the Hausdorff distance on the surface is
 //!    at most the step times the greatest stretch |∂S∘Φ/∂x| over the two shapes, the paper's
 //!    bound `D_h · a_max` with a_max taken along the step. Steps are chosen so that it is at most
-//!    the case's stepover.
+//!    0.8 of the case's stepover (the rest for a tilted tool's contact, which is not where the
+//!    axis meets the floor).
 //! 4. **Bridges (§2.2).** The shapes touch the offset boundary, so the paper's boundary
 //!    segments join them: from the bottom of one shape along the wall to the bottom of the
 //!    next. Every junction is tangent in the domain, and S is C¹, so the path is C¹.
@@ -44,9 +45,12 @@
 //!    point where the axis meets the floor; for a tapered tool it is turned by the taper angle
 //!    q away from the nearest wall at the wall, by `q (d₂ − d₁)/(d₂ + d₁)` between (d₁, d₂
 //!    the distances to the nearest and second-nearest wall), 0 on the bisector.
-//! 7. **Checked.** Every position is checked against the walls (cutter, shank and holder);
-//!    where one is closer than the margin the offset there grows and the path is built again.
-//!    Turns between moves above 2° are split until they are not.
+//! 7. **The tool on the floor.** It is lowered along its axis until it rests on the floor
+//!    ([`place`]); the heights are smoothed along the path over ±0.5 mm, never below the
+//!    floor, so that the kink where a flat bottom tilts through the normal is not a corner.
+//! 8. **Checked.** Every position is checked against the walls (cutter, shank and holder);
+//!    where one is closer than half the margin the offset there grows by the deficit and the
+//!    path is built again. Turns between moves above 2° are split (down to 0.02 mm moves).
 //!
 //! Links: one rapid from above the start (clearance over T along the axis) down to the start,
 //! in the air past the open side, and one rapid retract along the axis at the end.
