@@ -4,7 +4,7 @@
 //! outside the wall band, turns between cutting moves, and the axis against the field.
 //!
 //! - The floor (inside the unit square, where there is material) and the walls are sampled
-//!   about 0.2 mm apart. The tool is a solid of revolution: a flat bottom, the corner as a
+//!   about 0.2 mm apart, and the material behind the upper half of each wall more coarsely. The tool is a solid of revolution: a flat bottom, the corner as a
 //!   torus, the flutes (a cone for a tapered tool), the shank and the holder, each a region of
 //!   the (ρ, z) half-plane with its signed distance; a sample inside any of them is a gouge (of
 //!   the cutter) or a collision (of the shank or holder), as deep as it is inside.
@@ -282,6 +282,32 @@ pub fn check(job: &FiveJob, moves: &[AxisMove]) -> FiveCheck {
         for i in 0..=na {
             for j in 0..=nw {
                 wall_pts.push(w(i as f64 / na as f64, j as f64 / nw as f64));
+            }
+        }
+        // the material behind the wall's upper part (a tool hanging over the top edge behind
+        // the wall holds no point of the wall itself): samples 0.4 mm and 2 mm behind it
+        let na2 = (na / 3).max(4);
+        let nw2 = (nw / 3).max(4);
+        for i in 0..=na2 {
+            let a = i as f64 / na2 as f64;
+            let b0 = side.at(a);
+            let f = job.floor.eval(b0.x, b0.y);
+            let inward = match side {
+                Side::U0 => f.su,
+                Side::U1 => -f.su,
+                Side::V0 => f.sv,
+                Side::V1 => -f.sv,
+            };
+            for j in nw2 / 2..=nw2 {
+                let b = j as f64 / nw2 as f64;
+                let e = 1e-4;
+                let ds = w((a + e).min(1.0), b) - w((a - e).max(0.0), b);
+                let dw = w(a, (b + e).min(1.0)) - w(a, (b - e).max(0.0));
+                let n = ds.cross(dw).normalize_or_zero();
+                let n = if n.dot(inward) < 0.0 { -n } else { n };
+                for d in [0.4, 2.0] {
+                    wall_pts.push(w(a, b) - n * d);
+                }
             }
         }
         // the fillet the tool leaves: from the floor–wall angle γ at the base

@@ -6,9 +6,10 @@
 //! axis passes through a floor point is lowered or lifted along the axis until its lower
 //! envelope (flat bottom, corner arc) touches the highest sample under it, and the contact is
 //! refined on the surface itself by a pattern search. The walls are sampled 0.2 mm along and
-//! 0.25 mm up and kept in a uniform grid of cells; the clearance of a tool position is the least
-//! radial distance from the tool's side (cutter, shank, holder) to a wall point within its
-//! height. Neither needs the contact geometry in closed form, so the same code serves flat,
+//! 0.25 mm up, with layers 0.5 to 5 mm behind their upper part (the solid blade a tool could
+//! hang behind, over a twisted wall's top edge), and kept in a uniform grid of cells; the
+//! clearance of a tool position is the least radial distance from the tool's side (cutter,
+//! shank, holder) to a wall point within its height. Neither needs the contact geometry in closed form, so the same code serves flat,
 //! bull-nose, ball and tapered tools on any C¹ floor.
 
 use super::{Canon, at_floor};
@@ -250,6 +251,39 @@ impl WallCloud {
                 for j in 0..=nw {
                     pts.push(w(i as f64 / na as f64, j as f64 / nw as f64));
                     side.push(s as u8);
+                }
+            }
+            // Behind the upper part of the wall, layers of points in the material: a tool that
+            // leans over a wall's top edge and hangs down behind it holds none of the wall's
+            // own points, but it is in the part (the blade is solid), and where a wall twists
+            // near its top it can come there without touching the sheet.
+            let into = |a: f64| -> DVec3 {
+                let b = s.at(a);
+                let f = job.floor.eval(b.x, b.y);
+                match s {
+                    Side::U0 => f.su,
+                    Side::U1 => -f.su,
+                    Side::V0 => f.sv,
+                    Side::V1 => -f.sv,
+                }
+            };
+            let (la, lw) = ((along / 0.5).ceil().clamp(2.0, 2000.0) as usize, (up / 0.5).ceil().clamp(2.0, 400.0) as usize);
+            for i in 0..=la {
+                let a = i as f64 / la as f64;
+                let inward = into(a);
+                for j in (lw * 2 / 5)..=lw {
+                    let b = j as f64 / lw as f64;
+                    let (h, p) = (1e-4, w(a, b));
+                    let ws = w((a + h).min(1.0), b) - w((a - h).max(0.0), b);
+                    let ww = w(a, (b + h).min(1.0)) - w(a, (b - h).max(0.0));
+                    let mut n = ws.cross(ww).normalize_or_zero();
+                    if n.dot(inward) < 0.0 {
+                        n = -n;
+                    }
+                    for d in [0.5, 1.5, 3.0, 5.0] {
+                        pts.push(p - n * d);
+                        side.push(s as u8);
+                    }
                 }
             }
         }
