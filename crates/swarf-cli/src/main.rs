@@ -1271,6 +1271,10 @@ fn five(a: FiveArgs) -> Result<(), Failure> {
     output::check(&outs, &[&a.input])?;
     let job = swarf::io::five::read_five(&a.input)?;
     let opts = FiveOptions { back: a.back, ..FiveOptions::default() };
+    // (the library refuses it too, but of the job; here it is the flag's)
+    if let Err(e) = opts.validate() {
+        return Err(Failure { user: true, msg: format!("--back: {e}") });
+    }
     let p = swarf::job::five::run(&job, &opts).map_err(|e| e.in_file(&a.input))?;
     let mut files = vec![OutputFile::new(&a.output, p.cl.clone().into_bytes())];
     if let Some(g) = &a.gcode {

@@ -150,6 +150,11 @@ fn a_bad_case_is_refused_and_nothing_is_written() {
         assert!(err.contains(&format!("{what}.json")) && err.contains(needle), "{what}: {err}");
         assert_eq!(dir.listing(), before, "{what}: nothing written");
     }
+    // an option out of range is the option's fault
+    let out = swarf(dir.path(), &["five", example().to_str().expect("utf-8"), "-o", "out.cl", "--back", "0.01"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--back"));
+    assert!(!dir.path().join("out.cl").exists());
     // the output may not replace the input
     let out = swarf(dir.path(), &["five", closed.to_str().expect("utf-8"), "-o", closed.to_str().expect("utf-8")]);
     assert_eq!(out.status.code(), Some(2));

@@ -79,6 +79,19 @@ pub struct FiveOptions {
     pub margin: f64,
 }
 
+impl FiveOptions {
+    /// What is wrong with the options, if anything.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        if !(self.back >= 0.05 && self.back <= 1.0) {
+            return Err(format!("{}: the back of a shape must be from 0.05 to 1 of its front", self.back));
+        }
+        if !(self.margin > 0.0 && self.margin <= 1.0) {
+            return Err(format!("{}: the wall margin must be above 0 and at most 1 mm", self.margin));
+        }
+        Ok(())
+    }
+}
+
 impl Default for FiveOptions {
     fn default() -> Self {
         FiveOptions { back: 0.5, margin: 0.03 }
@@ -449,9 +462,7 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
     let j = &canon.job;
     let prof = Profile::of(&j.tool);
     let r = prof.radius();
-    if !(opts.back > 0.05 && opts.back <= 1.0) {
-        return Err(Error::job("back", "the back of a shape must be between 0.05 and 1 of its front"));
-    }
+    opts.validate().map_err(|e| Error::job("options", e))?;
     // the floor's size: mean length along u and width across, greatest stretches
     let iso_u = |v: f64| polyline_len((0..=128).map(|i| j.floor.eval(i as f64 / 128.0, v).p));
     let iso_v = |u: f64| polyline_len((0..=64).map(|i| j.floor.eval(u, i as f64 / 64.0).p));

@@ -267,7 +267,8 @@ impl WallCloud {
                     Side::V1 => -f.sv,
                 }
             };
-            let (la, lw) = ((along / 0.5).ceil().clamp(2.0, 2000.0) as usize, (up / 0.5).ceil().clamp(2.0, 400.0) as usize);
+            let (la, lw) =
+                ((along / 0.5).ceil().clamp(2.0, 2000.0) as usize, (up / 0.5).ceil().clamp(2.0, 400.0) as usize);
             for i in 0..=la {
                 let a = i as f64 / la as f64;
                 let inward = into(a);
