@@ -5,7 +5,7 @@
 //! geometry's conventions (which side is which, the ruled default wall, the field V = T − S)
 //! are those of the case format in `docs/five.md`.
 
-use crate::geom::nurbs::NurbsSurface;
+use crate::geom::nurbs::{NurbsSurface, SurfacePoint};
 use glam::{DVec2, DVec3};
 
 /// A side of the parameter square.
@@ -33,6 +33,17 @@ impl Side {
             Side::U1 => DVec2::new(1.0, s),
             Side::V0 => DVec2::new(s, 0.0),
             Side::V1 => DVec2::new(s, 1.0),
+        }
+    }
+
+    /// The floor's parameter direction from this side into the pocket at the floor point
+    /// `f` on it (S_u at u = 0, −S_u at u = 1, S_v at v = 0, −S_v at v = 1).
+    pub fn inward(self, f: &SurfacePoint) -> DVec3 {
+        match self {
+            Side::U0 => f.su,
+            Side::U1 => -f.su,
+            Side::V0 => f.sv,
+            Side::V1 => -f.sv,
         }
     }
 

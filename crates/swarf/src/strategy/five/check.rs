@@ -15,7 +15,7 @@
 //! - The axis is compared with the field at the floor point under the tip; a tapered tool is
 //!   allowed its turn from the walls, q (d₂ − d₁)/(d₂ + d₁), or q within the band.
 
-use super::place::{Profile, polyline_len};
+use super::place::{Grid, Profile, dist_polyline, polyline_len};
 use crate::geom::DVec3;
 use crate::model::five::{Boundary, CutterKind, FiveJob, Side};
 use crate::post::five::AxisMove;
@@ -142,74 +142,18 @@ impl Solid {
 
 /// Samples in a uniform grid of cells.
 struct Cloud {
-    lo: DVec3,
-    cell: f64,
-    dims: [usize; 3],
-    start: Vec<u32>,
-    idx: Vec<u32>,
+    grid: Grid,
     pts: Vec<DVec3>,
 }
 
 impl Cloud {
     fn new(pts: Vec<DVec3>, cell: f64) -> Cloud {
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for p in &pts {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
-        }
-        if pts.is_empty() {
-            (lo, hi) = (DVec3::ZERO, DVec3::ZERO);
-        }
-        // (cells no smaller than keeps their count to a few million, however far apart the
-        // samples are)
-        let span = hi - lo;
-        let cell = cell.max((span.x * span.y * span.z / 4e6).cbrt()).max(1e-6);
-        let dims = [0, 1, 2].map(|k| ((span[k] / cell) as usize + 1).min(2048));
-        let key = |p: DVec3| {
-            let c = [0, 1, 2].map(|k| (((p[k] - lo[k]) / cell) as usize).min(dims[k] - 1));
-            (c[0] * dims[1] + c[1]) * dims[2] + c[2]
-        };
-        let n = dims[0] * dims[1] * dims[2];
-        let mut start = vec![0u32; n + 1];
-        for p in &pts {
-            start[key(*p) + 1] += 1;
-        }
-        for c in 0..n {
-            start[c + 1] += start[c];
-        }
-        let mut fill = start.clone();
-        let mut idx = vec![0u32; pts.len()];
-        for (k, p) in pts.iter().enumerate() {
-            let c = key(*p);
-            idx[fill[c] as usize] = k as u32;
-            fill[c] += 1;
-        }
-        Cloud { lo, cell, dims, start, idx, pts }
+        Cloud { grid: Grid::new(&pts, cell), pts }
     }
 
-    /// Calls `f` with every sample within `pad` of the box `[a, b]`.
+    /// Calls `f` with every sample within `pad` of the segment `[a, b]` (and some more).
     fn near(&self, a: DVec3, b: DVec3, pad: f64, mut f: impl FnMut(DVec3)) {
-        if self.pts.is_empty() {
-            return;
-        }
-        let lo = a.min(b) - DVec3::splat(pad) - self.lo;
-        let hi = a.max(b) + DVec3::splat(pad) - self.lo;
-        let c0 = [0, 1, 2].map(|k| (lo[k] / self.cell).floor().max(0.0) as usize);
-        let c1 = [0, 1, 2].map(|k| (hi[k] / self.cell).floor().min(self.dims[k] as f64 - 1.0));
-        if (0..3).any(|k| c1[k] < c0[k] as f64) {
-            return;
-        }
-        for i in c0[0]..=c1[0] as usize {
-            for j in c0[1]..=c1[1] as usize {
-                for k in c0[2]..=c1[2] as usize {
-                    let c = (i * self.dims[1] + j) * self.dims[2] + k;
-                    for &p in &self.idx[self.start[c] as usize..self.start[c + 1] as usize] {
-                        f(self.pts[p as usize]);
-                    }
-                }
-            }
-        }
+        self.grid.near(a, b, pad, |k| f(self.pts[k]));
     }
 }
 
@@ -292,12 +236,7 @@ pub fn check(job: &FiveJob, moves: &[AxisMove]) -> FiveCheck {
             let a = i as f64 / na2 as f64;
             let b0 = side.at(a);
             let f = job.floor.eval(b0.x, b0.y);
-            let inward = match side {
-                Side::U0 => f.su,
-                Side::U1 => -f.su,
-                Side::V0 => f.sv,
-                Side::V1 => -f.sv,
-            };
+            let inward = side.inward(&f);
             for j in nw2 / 2..=nw2 {
                 let b = j as f64 / nw2 as f64;
                 let e = 1e-4;
@@ -317,12 +256,7 @@ pub fn check(job: &FiveJob, moves: &[AxisMove]) -> FiveCheck {
             let s = i as f64 / 20.0;
             let b = side.at(s);
             let f = job.floor.eval(b.x, b.y);
-            let inward = match side {
-                Side::U0 => f.su,
-                Side::U1 => -f.su,
-                Side::V0 => f.sv,
-                Side::V1 => -f.sv,
-            };
+            let inward = side.inward(&f);
             let n = f.normal();
             let inward = (inward - n * inward.dot(n)).normalize();
             let up = (w(s, 0.05) - w(s, 0.0)).normalize();
@@ -337,15 +271,6 @@ pub fn check(job: &FiveJob, moves: &[AxisMove]) -> FiveCheck {
         bases.push((base, fillet + job.wall_band_margin));
     }
     let wall_cloud = Cloud::new(wall_pts, 2.0);
-    let dist_base = |p: DVec3, b: &[DVec3]| {
-        b.windows(2)
-            .map(|w| {
-                let d = w[1] - w[0];
-                let t = ((p - w[0]).dot(d) / d.length_squared().max(1e-300)).clamp(0.0, 1.0);
-                (p - (w[0] + d * t)).length()
-            })
-            .fold(f64::INFINITY, f64::min)
-    };
 
     // gouges and collisions at every position; rapids every millimetre
     let mut out = FiveCheck::default();
@@ -398,7 +323,7 @@ pub fn check(job: &FiveJob, moves: &[AxisMove]) -> FiveCheck {
     let q_rad = if job.tool.kind == CutterKind::Tapered { job.tool.taper_deg.to_radians() } else { 0.0 };
     let unreachable = |p: DVec3| -> bool {
         let Some((d1, k1)) =
-            bases.iter().enumerate().map(|(k, (b, _))| (dist_base(p, b), k)).min_by(|a, b| a.0.total_cmp(&b.0))
+            bases.iter().enumerate().map(|(k, (b, _))| (dist_polyline(p, b), k)).min_by(|a, b| a.0.total_cmp(&b.0))
         else {
             return false;
         };
@@ -433,7 +358,7 @@ pub fn check(job: &FiveJob, moves: &[AxisMove]) -> FiveCheck {
     let covered: Vec<(f64, f64, f64)> = floor
         .par_iter()
         .map(|&(p, area, _, _)| {
-            if bases.iter().any(|(b, band)| dist_base(p, b) < *band) {
+            if bases.iter().any(|(b, band)| dist_polyline(p, b) < *band) {
                 return (0.0, 0.0, 0.0);
             }
             let mut best = f64::INFINITY;
@@ -502,7 +427,7 @@ pub fn check(job: &FiveJob, moves: &[AxisMove]) -> FiveCheck {
             let allow = if q == 0.0 {
                 0.0
             } else {
-                let mut d: Vec<(f64, f64)> = bases.iter().map(|(b, band)| (dist_base(foot, b), *band)).collect();
+                let mut d: Vec<(f64, f64)> = bases.iter().map(|(b, band)| (dist_polyline(foot, b), *band)).collect();
                 d.sort_by(|x, y| x.0.total_cmp(&y.0));
                 match d.as_slice() {
                     [] => 0.0,

@@ -65,7 +65,7 @@ use crate::geom::nurbs::SurfacePoint;
 use crate::geom::{DVec2, DVec3};
 use crate::model::five::{Boundary, CutterKind, FiveJob, Side};
 use crate::post::five::AxisMove;
-use place::{FloorGrid, Profile, WallCloud, polyline_len};
+use place::{FloorGrid, Profile, WallCloud, dist_polyline, polyline_len};
 use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -307,12 +307,7 @@ impl Pocket {
                 None => 1.0,
             };
             // away from the wall: into the pocket across it
-            let inward = match s1 {
-                Side::U0 => sp.su,
-                Side::U1 => -sp.su,
-                Side::V0 => sp.sv,
-                Side::V1 => -sp.sv,
-            };
+            let inward = s1.inward(&sp);
             let dir = (inward - a * inward.dot(a)).normalize_or_zero();
             let phi = self.taper * m;
             a = (a * phi.cos() + dir * phi.sin()).normalize();
@@ -358,16 +353,6 @@ impl Pocket {
         }
         Ok(hi)
     }
-}
-
-fn dist_polyline(p: DVec3, b: &[DVec3]) -> f64 {
-    b.windows(2)
-        .map(|w| {
-            let d = w[1] - w[0];
-            let t = ((p - w[0]).dot(d) / d.length_squared().max(1e-300)).clamp(0.0, 1.0);
-            (p - (w[0] + d * t)).length()
-        })
-        .fold(f64::INFINITY, f64::min)
 }
 
 /// A piece of the path in the scaled offset domain (x along, y across, mm).

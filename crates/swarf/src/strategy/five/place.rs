@@ -91,10 +91,9 @@ impl Profile {
         }
     }
 
-    /// The widest the cutter and shank get, and the whole tool's length.
-    fn spans(&self) -> (f64, f64) {
-        let cutter = (self.r + self.flutes * self.tan_q).max(self.shank);
-        (cutter, self.length + self.holder.map_or(0.0, |h| h.1))
+    /// The widest the cutter and shank get.
+    fn cutter_width(&self) -> f64 {
+        (self.r + self.flutes * self.tan_q).max(self.shank)
     }
 
     /// The cutter's radius at the tip end (before the corner).
@@ -210,14 +209,90 @@ impl FloorGrid {
     }
 }
 
-/// Wall points in a uniform grid of cells.
-pub struct WallCloud {
-    origin: DVec3,
+/// Points in a uniform grid of cells, for the points near a segment.
+pub struct Grid {
+    lo: DVec3,
     cell: f64,
     dims: [usize; 3],
     /// Cell c's points are `idx[start[c]..start[c + 1]]`.
     start: Vec<u32>,
     idx: Vec<u32>,
+}
+
+impl Grid {
+    /// The grid of `pts` in cells of `cell` (larger where that would make more than a few
+    /// million cells, however far apart the points are).
+    pub fn new(pts: &[DVec3], cell: f64) -> Grid {
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for p in pts {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        if pts.is_empty() {
+            (lo, hi) = (DVec3::ZERO, DVec3::ZERO);
+        }
+        let span = hi - lo;
+        let cell = cell.max((span.x * span.y * span.z / 4e6).cbrt()).max(1e-6);
+        let dims = [0, 1, 2].map(|k| ((span[k] / cell) as usize + 1).min(2048));
+        let key = |p: DVec3| {
+            let c = [0, 1, 2].map(|k| (((p[k] - lo[k]) / cell) as usize).min(dims[k] - 1));
+            (c[0] * dims[1] + c[1]) * dims[2] + c[2]
+        };
+        let n = dims[0] * dims[1] * dims[2];
+        let mut start = vec![0u32; n + 1];
+        for p in pts {
+            start[key(*p) + 1] += 1;
+        }
+        for c in 0..n {
+            start[c + 1] += start[c];
+        }
+        let mut fill = start.clone();
+        let mut idx = vec![0u32; pts.len()];
+        for (k, p) in pts.iter().enumerate() {
+            let c = key(*p);
+            idx[fill[c] as usize] = k as u32;
+            fill[c] += 1;
+        }
+        Grid { lo, cell, dims, start, idx }
+    }
+
+    /// Calls `f` with the index of every point in the cells that come within `pad` of the
+    /// segment from `a` to `b` (all the points within `pad` of it, and some more).
+    pub fn near(&self, a: DVec3, b: DVec3, pad: f64, mut f: impl FnMut(usize)) {
+        if self.idx.is_empty() {
+            return;
+        }
+        let lo = a.min(b) - DVec3::splat(pad) - self.lo;
+        let hi = a.max(b) + DVec3::splat(pad) - self.lo;
+        let c0 = [0, 1, 2].map(|k| (lo[k] / self.cell).floor().max(0.0) as usize);
+        let c1 = [0, 1, 2].map(|k| ((hi[k] / self.cell).floor().max(-1.0) as isize).min(self.dims[k] as isize - 1));
+        if (0..3).any(|k| c1[k] < c0[k] as isize) {
+            return;
+        }
+        let (len, dir) = ((b - a).length(), (b - a).normalize_or_zero());
+        let half = self.cell * 0.87;
+        for i in c0[0]..=c1[0] as usize {
+            for j in c0[1]..=c1[1] as usize {
+                for k in c0[2]..=c1[2] as usize {
+                    // (a cell whose centre is farther than that holds no point near the segment)
+                    let centre = self.lo + DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * self.cell;
+                    let t = (centre - a).dot(dir).clamp(0.0, len);
+                    if (centre - (a + dir * t)).length() > pad + half {
+                        continue;
+                    }
+                    let c = (i * self.dims[1] + j) * self.dims[2] + k;
+                    for &p in &self.idx[self.start[c] as usize..self.start[c + 1] as usize] {
+                        f(p as usize);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Wall points in a grid of cells, each with its side.
+pub struct WallCloud {
+    grid: Grid,
     pts: Vec<DVec3>,
     side: Vec<u8>,
 }
@@ -259,13 +334,7 @@ impl WallCloud {
             // near its top it can come there without touching the sheet.
             let into = |a: f64| -> DVec3 {
                 let b = s.at(a);
-                let f = job.floor.eval(b.x, b.y);
-                match s {
-                    Side::U0 => f.su,
-                    Side::U1 => -f.su,
-                    Side::V0 => f.sv,
-                    Side::V1 => -f.sv,
-                }
+                s.inward(&job.floor.eval(b.x, b.y))
             };
             let (la, lw) =
                 ((along / 0.5).ceil().clamp(2.0, 2000.0) as usize, (up / 0.5).ceil().clamp(2.0, 400.0) as usize);
@@ -288,40 +357,7 @@ impl WallCloud {
                 }
             }
         }
-        let mut cell = 2.0f64;
-        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        for p in &pts {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
-        }
-        if pts.is_empty() {
-            lo = DVec3::ZERO;
-            hi = DVec3::ZERO;
-        }
-        // (cells no smaller than keeps their count to a few million)
-        let span = hi - lo;
-        cell = cell.max((span.x * span.y * span.z / 4e6).cbrt());
-        let dims = [0, 1, 2].map(|k| ((span[k] / cell).floor() as usize + 1).min(2048));
-        let key = |p: DVec3| -> usize {
-            let c = [0, 1, 2].map(|k| (((p[k] - lo[k]) / cell) as usize).min(dims[k] - 1));
-            (c[0] * dims[1] + c[1]) * dims[2] + c[2]
-        };
-        let n = dims[0] * dims[1] * dims[2];
-        let mut count = vec![0u32; n + 1];
-        for p in &pts {
-            count[key(*p) + 1] += 1;
-        }
-        for c in 0..n {
-            count[c + 1] += count[c];
-        }
-        let mut fill = count.clone();
-        let mut idx = vec![0u32; pts.len()];
-        for (k, p) in pts.iter().enumerate() {
-            let c = key(*p);
-            idx[fill[c] as usize] = k as u32;
-            fill[c] += 1;
-        }
-        WallCloud { origin: lo, cell, dims, start: count, idx, pts, side }
+        WallCloud { grid: Grid::new(&pts, 2.0), pts, side }
     }
 
     /// The least clearance between the tool at `tip` with axis `a` and the wall points (of
@@ -332,56 +368,30 @@ impl WallCloud {
         if self.pts.is_empty() {
             return best;
         }
-        let (cutter, total) = prof.spans();
-        let mut segs = vec![(0.0, prof.length, cutter)];
+        let mut segs = vec![(0.0, prof.length, prof.cutter_width())];
         if let Some((hr, hl)) = prof.holder {
             segs.push((prof.length, prof.length + hl, hr));
         }
-        let _ = total;
         for (z0, z1, r) in segs {
-            let (p0, p1) = (tip + a * z0, tip + a * z1);
-            let pad = r + 0.5;
-            let lo = p0.min(p1) - DVec3::splat(pad) - self.origin;
-            let hi = p0.max(p1) + DVec3::splat(pad) - self.origin;
-            let c0 = [0, 1, 2].map(|k| (lo[k] / self.cell).floor().max(0.0) as usize);
-            let c1 = [0, 1, 2].map(|k| ((hi[k] / self.cell).floor().max(-1.0) as isize).min(self.dims[k] as isize - 1));
-            if (0..3).any(|k| c1[k] < c0[k] as isize) {
-                continue;
-            }
-            let half = self.cell * 0.87;
-            for i in c0[0]..=c1[0] as usize {
-                for j in c0[1]..=c1[1] as usize {
-                    for k in c0[2]..=c1[2] as usize {
-                        let centre =
-                            self.origin + DVec3::new(i as f64 + 0.5, j as f64 + 0.5, k as f64 + 0.5) * self.cell;
-                        // the cell is near the segment?
-                        let t = (centre - p0).dot(a).clamp(0.0, z1 - z0);
-                        if (centre - (p0 + a * t)).length() > pad + half {
-                            continue;
-                        }
-                        let c = (i * self.dims[1] + j) * self.dims[2] + k;
-                        for &pi in &self.idx[self.start[c] as usize..self.start[c + 1] as usize] {
-                            let s = side_of(self.side[pi as usize]);
-                            if only.is_some_and(|o| o != s) {
-                                continue;
-                            }
-                            let d = self.pts[pi as usize] - tip;
-                            let z = d.dot(a);
-                            if z < z0 - 1e-9 || z > z1 {
-                                continue;
-                            }
-                            let r = prof.reach(z);
-                            if r < 0.0 {
-                                continue;
-                            }
-                            let rho = (d.length_squared() - z * z).max(0.0).sqrt();
-                            if rho - r < best.0 {
-                                best = (rho - r, Some(s));
-                            }
-                        }
-                    }
+            self.grid.near(tip + a * z0, tip + a * z1, r + 0.5, |pi| {
+                let s = side_of(self.side[pi]);
+                if only.is_some_and(|o| o != s) {
+                    return;
                 }
-            }
+                let d = self.pts[pi] - tip;
+                let z = d.dot(a);
+                if z < z0 - 1e-9 || z > z1 {
+                    return;
+                }
+                let r = prof.reach(z);
+                if r < 0.0 {
+                    return;
+                }
+                let rho = (d.length_squared() - z * z).max(0.0).sqrt();
+                if rho - r < best.0 {
+                    best = (rho - r, Some(s));
+                }
+            });
         }
         best
     }
@@ -389,6 +399,17 @@ impl WallCloud {
 
 fn side_of(k: u8) -> Side {
     Side::ALL[k as usize]
+}
+
+/// The distance from `p` to the polyline `b`.
+pub fn dist_polyline(p: DVec3, b: &[DVec3]) -> f64 {
+    b.windows(2)
+        .map(|w| {
+            let d = w[1] - w[0];
+            let t = ((p - w[0]).dot(d) / d.length_squared().max(1e-300)).clamp(0.0, 1.0);
+            (p - (w[0] + d * t)).length()
+        })
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// The length of a polyline.
