@@ -5,27 +5,16 @@
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
 
 // ---- helpers ---------------------------------------------------------------------------------
 
 use crate::common;
-use common::TempDir;
+use common::{TempDir, swarf};
 
 fn case(name: &str) -> PathBuf {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cases").join(name);
     assert!(p.is_file(), "{} is missing", p.display());
     p
-}
-
-/// Runs `swarf ARGS` in `dir`.
-fn swarf(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_swarf"))
-        .current_dir(dir)
-        .args(args)
-        .stdin(Stdio::null())
-        .output()
-        .expect("run swarf")
 }
 
 /// `swarf rough INPUT -o out.ngc --report out.json EXTRA…` in `dir` must fail with exit code

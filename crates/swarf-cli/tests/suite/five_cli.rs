@@ -3,23 +3,14 @@
 //! on PATH; CI requires it), `--help` lists `--gcode`, and a bad case is refused with exit 2, a
 //! message naming the file and the key, and nothing written.
 
-use crate::common::TempDir;
+use crate::common::{TempDir, swarf};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 
 fn example() -> PathBuf {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/five/channel.json");
     assert!(p.is_file(), "{} is missing", p.display());
     p
-}
-
-fn swarf(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_swarf"))
-        .current_dir(dir)
-        .args(args)
-        .stdin(Stdio::null())
-        .output()
-        .expect("run swarf")
 }
 
 fn find_on_path(name: &str) -> Option<PathBuf> {

@@ -5,6 +5,7 @@
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// A fresh folder under the system temp dir, removed on drop unless the test failed.
@@ -69,4 +70,14 @@ pub fn plan_report(case: &Path, tools: &Path, out: &Path) -> serde_json::Value {
         .expect("run swarf");
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).expect("report")).expect("json")
+}
+
+/// Runs the built `swarf ARGS` in `dir`, with no input.
+pub fn swarf(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_swarf"))
+        .current_dir(dir)
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("run swarf")
 }
