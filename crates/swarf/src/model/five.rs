@@ -47,6 +47,16 @@ impl Side {
         }
     }
 
+    /// The side across the domain from this one.
+    pub fn opposite(self) -> Side {
+        match self {
+            Side::U0 => Side::U1,
+            Side::U1 => Side::U0,
+            Side::V0 => Side::V1,
+            Side::V1 => Side::V0,
+        }
+    }
+
     /// The side's key in the case format.
     pub fn key(self) -> &'static str {
         match self {

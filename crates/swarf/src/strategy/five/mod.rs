@@ -13,20 +13,24 @@
 //!        v=0 ───────────────────────────
 //! ```
 //!
-//! 1. **Variable offset (§2.2, Fig. 4).** The tool must stay off the walls. For each wall the
-//!    least offset that keeps the tool (dropped on the floor, its axis from the field) clear
-//!    of it is found by bisection at samples along the wall, smoothed into a C² function of the
-//!    position along the wall; the domain is then mapped so that points on a wall move by the
-//!    full offset and points inside in proportion to their distance from it, the bisector
-//!    between opposite walls staying in place: `v' = a₀(u) + v (1 − a₀(u) − a₁(u))`, and
-//!    `u' = u (1 − b(v))` for a wall at u = 1. The map is C¹ (C²), so it keeps the path C¹.
-//!    Distances are along the floor's parameter lines, which is the geodesic distance where
-//!    those lines cross the walls square; the check after planning catches the rest (below).
-//! 2. **Maximal shapes (§2.1, Fig. 1–2).** In the offset domain, scaled to the floor's mean
-//!    length and width so that a circle there is round on the surface, the medial axis of the
-//!    strip between the walls is its centre line, and the maximal circles along it touch both
-//!    walls. Each is cut as the paper's Fig. 2(c) shape: the front half circle, which cuts,
-//!    and a shorter half ellipse behind it, which returns over cut floor (`back`).
+//! 1. **Variable offset (§2.2, Fig. 4).** The tool must stay off the walls. Geodesic distance
+//!    maps from each side over the domain (`geodesic`, fast marching on the floor) give
+//!    every point its distance from each side and its foot there. For each wall the least
+//!    offset that keeps the tool (dropped on the floor, its axis from the field) clear of it is
+//!    found by bisection at samples along the wall, smoothed into a C² function of the foot.
+//!    Each side wall then pushes a point straight away from it (along the distance's
+//!    gradient) by its offset times the point's share `d′/(d + d′)` of the distances to it and
+//!    to the opposite side: the full offset on the wall, less inside, the bisector staying in
+//!    place (the paper's rule). A wall at u = 1 pushes the same way, along the line the side
+//!    pushes left the point on, so a corner stands off both walls whatever their angle
+//!    (`Layout::to_floor`). The distances are smooth and so is the map: the path stays C¹.
+//! 2. **Maximal shapes (§2.1, Fig. 1–2).** The domain across is measured by the share of the
+//!    geodesic distances to the two sides, and scaled to the floor's mean length and width so
+//!    that a circle there is round on the surface; its centre line is the geodesic bisector of
+//!    the sides, the medial axis of the strip between them, and the maximal circles along it
+//!    touch both offset walls. Each is cut as the paper's Fig. 2(c) shape: the front half
+//!    circle, which cuts, and a shorter half ellipse behind it, which returns over cut floor
+//!    (`back`).
 //! 3. **Hausdorff stepover (§2.1).** Neighbouring shapes are translates, so every point of
 //!    one lies on a segment of the other's translate; the Hausdorff distance on the surface is
 //!    at most the step times the greatest stretch |∂S∘Φ/∂x| over the two shapes, the paper's
@@ -56,6 +60,7 @@
 //! in the air past the open side, and one rapid retract along the axis at the end.
 
 mod check;
+mod geodesic;
 mod place;
 
 pub use check::{FiveCheck, check};
@@ -65,6 +70,7 @@ use crate::geom::nurbs::SurfacePoint;
 use crate::geom::{DVec2, DVec3};
 use crate::model::five::{Boundary, CutterKind, FiveJob, Side};
 use crate::post::five::AxisMove;
+use geodesic::{DistanceMap, Lattice};
 use place::{FloorGrid, Profile, WallCloud, dist_polyline, polyline_len};
 use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -248,7 +254,8 @@ impl Smooth {
     }
 }
 
-/// The wall offsets, in the floor's parameter: a₀(u) at v = 0, a₁(u) at v = 1, b(v) at u = 1.
+/// The wall offsets, mm on the floor, as functions of the place along the wall (the floor's
+/// u along v = 0 and v = 1, its v along u = 1).
 struct Offsets {
     /// Required offsets at the samples (before smoothing), per side V0, V1, U1.
     need: [Vec<f64>; 3],
@@ -287,6 +294,8 @@ struct Pocket {
     taper: f64,
     /// How far past an open side the field follows the continued surfaces, in u and v.
     reach: DVec2,
+    /// The geodesic distance from each side, in `Side::ALL`'s order.
+    maps: [DistanceMap; 4],
 }
 
 impl Pocket {
@@ -317,42 +326,108 @@ impl Pocket {
         (o, a, lam + 0.002)
     }
 
-    /// The least param offset from the wall `side` at `s` along it that keeps the tool
-    /// `margin` clear of that wall.
-    fn need(&self, side: Side, s: f64, margin: f64) -> Result<f64> {
-        let at = |t: f64| match side {
-            Side::V0 => (s, t),
-            Side::V1 => (s, 1.0 - t),
-            Side::U1 => (1.0 - t, s),
-            Side::U0 => (t, s),
-        };
+    /// The geodesic distance map of `side`.
+    fn map(&self, side: Side) -> &DistanceMap {
+        &self.maps[Side::ALL.iter().position(|s| *s == side).expect("a side")]
+    }
+
+    /// The pocket's two geodesic coordinates at `p` and their gradients, with weights `k`
+    /// (the share of the v0 side and the share of the u0 side, held fixed while a point
+    /// moves): across, `k.x d(v0) − (1 − k.x) d(v1)`, and along, `k.y d(u0) − (1 − k.y) d(u1)`
+    /// (signed distances, mm). Each grows by a millimetre when a point moves a millimetre away
+    /// from the first side of its pair; near one side it is (plus or minus) the distance from
+    /// that side alone, whatever the angle of the other.
+    fn coords(&self, p: DVec2, k: DVec2) -> (DVec2, DVec2, DVec2) {
+        let [u0, u1, v0, v1] = [Side::U0, Side::U1, Side::V0, Side::V1].map(|s| self.map(s).at(p));
+        (
+            DVec2::new(k.x * v0.d - (1.0 - k.x) * v1.d, k.y * u0.d - (1.0 - k.y) * u1.d),
+            v0.grad * k.x - v1.grad * (1.0 - k.x),
+            u0.grad * k.y - u1.grad * (1.0 - k.y),
+        )
+    }
+
+    /// Each side's share of `p` against its opposite side: `d(v1) / (d(v0) + d(v1))` for v0,
+    /// `d(u1) / (d(u0) + d(u1))` for u0 (1 on the side, 0 on the opposite one).
+    fn shares(&self, p: DVec2) -> DVec2 {
+        let [u0, u1, v0, v1] = [Side::U0, Side::U1, Side::V0, Side::V1].map(|s| self.map(s).at(p).d);
+        DVec2::new(v1 / (v0 + v1).max(1e-9), u1 / (u0 + u1).max(1e-9))
+    }
+
+    /// `out` moved along the line of its across coordinate (weights `k`) to where the along
+    /// coordinate is that of `p` less `t`: the end wall's push of `p` by `t`, after the side
+    /// walls' pushes took it to `out`.
+    fn slide(&self, p: DVec2, k: DVec2, out: DVec2, t: f64) -> DVec2 {
+        self.solve(out, k, DVec2::new(self.coords(out, k).0.x, self.coords(p, k).0.y - t))
+    }
+
+    /// The point near `start` where the coordinates weighted by `k` are `target`: three Newton
+    /// steps on the two distance equations, so that a point moved from a wall by an offset
+    /// lands that far from it, also in a corner where two walls meet at any angle.
+    fn solve(&self, start: DVec2, k: DVec2, target: DVec2) -> DVec2 {
+        let mut q = start;
+        for _ in 0..3 {
+            let (c, ga, gb) = self.coords(q, k);
+            let r = target - c;
+            let det = ga.x * gb.y - ga.y * gb.x;
+            let step = DVec2::new(r.x * gb.y - ga.y * r.y, ga.x * r.y - gb.x * r.x) / det;
+            // (the maps are read within their grid, which holds every point the path reaches)
+            if !(step.is_finite() && step.length() < 1.0) {
+                break;
+            }
+            q += step;
+        }
+        q
+    }
+
+    /// The least offset, mm, from the wall `side` at `s` along it that keeps the tool `margin`
+    /// clear of that wall, and the foot on that wall of where the tool then stands. The end
+    /// wall's is measured where [`Layout::to_floor`] puts the point: after the side walls'
+    /// pushes (`layout`), along the line they leave it on.
+    fn need(&self, side: Side, s: f64, margin: f64, layout: Option<&Layout>) -> Result<(f64, f64)> {
+        let p0 = side.at(s);
+        let step = unit_step(&at_floor(&self.canon.job, p0.x, p0.y), self.map(side).at(p0).grad);
+        let k = self.shares(p0);
+        let base = layout.map_or(p0, |l| l.across(self, p0, k, None));
+        let to = |t: f64| if side == Side::U1 { self.slide(p0, k, base, t) } else { p0 + step * t };
+        let foot = |t: f64| if side == Side::U1 { self.map(side).at(to(t)).foot } else { s };
         let clear = |t: f64| {
-            let (u, v) = at(t);
-            let (o, a, lam) = self.place(u, v);
+            let p = to(t);
+            let (o, a, lam) = self.place(p.x, p.y);
             let tip = o + a * lam;
             self.walls.clearance(&self.prof, tip, a, Some(side)).0
         };
         if clear(0.0) >= margin {
-            return Ok(0.0);
+            return Ok((foot(0.0), 0.0));
         }
-        let hi = 0.45;
-        if clear(hi) < margin {
-            let (u, v) = at(hi);
+        let hi = 0.45 * self.map(side.opposite()).at(p0).d;
+        if hi.is_nan() || hi <= 0.0 || clear(hi) < margin {
+            let p = to(hi.max(0.0));
             return Err(Error::job(
                 "tool",
                 format!(
-                    "the tool (cutter, shank or holder) cannot stand clear of the wall {} near (u, v) = ({u:.3}, {v:.3}): the pocket is too narrow for it, its stick-out too short, or the axis leans into the wall",
-                    side.key()
+                    "the tool (cutter, shank or holder) cannot stand clear of the wall {} near (u, v) = ({:.3}, {:.3}): the pocket is too narrow for it, its stick-out too short, or the axis leans into the wall",
+                    side.key(),
+                    p.x,
+                    p.y
                 ),
             ));
         }
         let (mut lo, mut hi) = (0.0, hi);
-        for _ in 0..16 {
+        for _ in 0..18 {
             let mid = 0.5 * (lo + hi);
             if clear(mid) >= margin { hi = mid } else { lo = mid }
         }
-        Ok(hi)
+        Ok((foot(hi), hi))
     }
+}
+
+/// The parameter step at `sp` that moves one millimetre on the floor along the gradient
+/// `grad` (mm per unit of u, v) of a distance: G⁻¹∇d over its length in the metric G.
+fn unit_step(sp: &SurfacePoint, grad: DVec2) -> DVec2 {
+    let (e, f, g) = (sp.su.dot(sp.su), sp.su.dot(sp.sv), sp.sv.dot(sp.sv));
+    let det = (e * g - f * f).max(1e-300);
+    let x = DVec2::new(g * grad.x - f * grad.y, e * grad.y - f * grad.x) / det;
+    x / grad.dot(x).max(1e-300).sqrt()
 }
 
 /// A piece of the path in the scaled offset domain (x along, y across, mm).
@@ -414,30 +489,74 @@ struct Layout {
 }
 
 impl Layout {
-    /// The floor's (u, v) of the scaled domain's (x, y).
-    fn to_floor(&self, q: DVec2) -> DVec2 {
-        let (u, v) = (q.x / self.x_len, q.y / self.w);
-        let across = |u: f64| {
-            let a0 = if self.walls[0] { self.offsets.smooth[0].eval(u) } else { 0.0 };
-            let a1 = if self.walls[1] { self.offsets.smooth[1].eval(u) } else { 0.0 };
-            (a0, a1)
-        };
-        // (the end wall's offset was measured at the floor's v: found with the offsets across
-        // at the offset u)
-        let b = if self.walls[2] {
-            // (two fixed-point steps: a smooth function still)
-            let mut b = 0.0;
-            for _ in 0..3 {
-                let (a0, a1) = across(u.min(1.0) * (1.0 - b));
-                b = self.offsets.smooth[2].eval(a0 + v * (1.0 - a0 - a1));
+    /// The floor's (u, v) of the scaled domain's (x, y) before the offset: u = x / length, and
+    /// v where the share `d(v0) / (d(v0) + d(v1))` of the geodesic distances across is
+    /// y / width. The domain's centre line is so the geodesic bisector of the two sides, the
+    /// medial axis of the strip between them, and the shapes centred on it are maximal.
+    fn domain(&self, pocket: &Pocket, q: DVec2) -> DVec2 {
+        let (u, t) = (q.x / self.x_len, q.y / self.w);
+        let (m0, m1) = (pocket.map(Side::V0), pocket.map(Side::V1));
+        // (Newton's method along v: the share is smooth and rises across the strip)
+        let mut v = t;
+        for _ in 0..4 {
+            let (a, b) = (m0.at(DVec2::new(u, v)), m1.at(DVec2::new(u, v)));
+            let sum = a.d + b.d;
+            if sum.abs() < 1e-9 {
+                break;
             }
-            b
-        } else {
-            0.0
-        };
-        let ue = u * (1.0 - b);
-        let (a0, a1) = across(ue);
-        DVec2::new(ue, a0 + v * (1.0 - a0 - a1))
+            let share = a.d / sum;
+            let slope = (a.grad.y * sum - a.d * (a.grad.y + b.grad.y)) / (sum * sum);
+            let step = (t - share) / slope;
+            if !(step.is_finite() && step.abs() < 1.0) {
+                break;
+            }
+            v += step;
+        }
+        DVec2::new(u, v)
+    }
+
+    /// The floor's (u, v) of the scaled domain's (x, y): its point before the offset
+    /// ([`Layout::domain`]) moved by the variable offset (§2.2).
+    ///
+    /// Each side wall pushes a point straight away from it (along its distance's gradient) by
+    /// the wall's offset at the point's foot (its nearest point on the wall) times the point's
+    /// share `d′ / (d + d′)` of the geodesic distances to that wall (d) and the opposite side
+    /// (d′): the full offset on the wall, less inside, half at the bisector (where opposite
+    /// walls' pushes cancel), nothing on an open opposite side. A wall at u = 1 then moves the
+    /// point along the line of the pocket's across coordinate it was pushed onto
+    /// ([`Pocket::coords`]) to where its own push (the same rule) puts it, so that in a corner
+    /// the point stands off both walls by their offsets whatever their angle. The offsets are
+    /// read at the feet of where the point ends, found by a second pass. The distances and
+    /// their gradients are smooth, and so is this map, which keeps the path C¹.
+    fn to_floor(&self, pocket: &Pocket, q: DVec2) -> DVec2 {
+        let p = self.domain(pocket, q);
+        let k = pocket.shares(p);
+        let out = self.across(pocket, p, k, None);
+        if !self.walls[2] {
+            return out;
+        }
+        let mut at = out;
+        for pass in 0..2 {
+            let base = if pass == 0 { out } else { self.across(pocket, p, k, Some(at)) };
+            let push = self.offsets.smooth[2].eval(pocket.map(Side::U1).at(at).foot) * (1.0 - k.y);
+            at = pocket.slide(p, k, base, push);
+        }
+        at
+    }
+
+    /// `p` pushed by the side walls, with the shares `k` at `p`; their offsets read at the
+    /// feet of `at` (where the point ends), or of `p`.
+    fn across(&self, pocket: &Pocket, p: DVec2, k: DVec2, at: Option<DVec2>) -> DVec2 {
+        let sp = at_floor(&pocket.canon.job, p.x, p.y);
+        let mut out = p;
+        for (i, side, share) in [(0, Side::V0, k.x), (1, Side::V1, 1.0 - k.x)] {
+            if self.walls[i] {
+                let r = pocket.map(side).at(p);
+                let foot = at.map_or(r.foot, |a| pocket.map(side).at(a).foot);
+                out += unit_step(&sp, r.grad) * (self.offsets.smooth[i].eval(foot) * share);
+            }
+        }
+        out
     }
 }
 
@@ -495,21 +614,40 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
     let taper = if j.tool.kind == CutterKind::Tapered { j.tool.taper_deg.to_radians() } else { 0.0 };
     let stepover = j.stepover;
     let reach = DVec2::new((r + 1.0) / su_min, (r + 1.0) / sv_min);
-    let pocket = Pocket { canon, prof, floor, walls: walls_cloud, bases, taper, reach };
-    let j = &pocket.canon.job;
+    // the geodesic distance maps from the sides, over the floor grid's span, about 0.4 mm apart
+    let (mut per_u, mut per_v) = ((su_max / 0.4).ceil().max(8.0), (sv_max / 0.4).ceil().max(8.0));
+    // (past the walls too, as far as the planner looks)
+    let (lu, hu) = (ulo, uhi.max(1.0 + (2.0 * r + 4.0) / su_min));
+    let (lv, hv) = (vlo.min(-(r + 2.0) / sv_min), vhi.max(1.0 + (r + 2.0) / sv_min));
+    let nodes = per_u * (hu - lu) * per_v * (hv - lv);
+    if nodes > 400_000.0 {
+        let f = (400_000.0 / nodes).sqrt();
+        (per_u, per_v) = ((per_u * f).ceil(), (per_v * f).ceil());
+    }
+    let lattice = Lattice::new((lu, hu), (lv, hv), per_u as usize, per_v as usize, |u, v| at_floor(&canon.job, u, v).p);
+    let maps: Vec<DistanceMap> = Side::ALL.par_iter().map(|s| DistanceMap::from_side(&lattice, *s)).collect();
+    let maps: [DistanceMap; 4] = maps.try_into().map_err(|_| Error::job("floor", "four sides"))?;
+    log::debug!("five: distance maps over {} nodes ({per_u} × {per_v} per unit)", lattice.len());
+    let pocket = Pocket { canon, prof, floor, walls: walls_cloud, bases, taper, reach, maps };
 
     // 1. the offsets each wall needs, sampled along it
     let sides = [Side::V0, Side::V1, Side::U1];
     let mut need: [Vec<f64>; 3] =
         [vec![0.0; OFFSET_SAMPLES + 1], vec![0.0; OFFSET_SAMPLES + 1], vec![0.0; OFFSET_SAMPLES + 1]];
+    // (the side walls' first: the end wall's are measured after their pushes)
+    let mut layout = Layout { x_len, w, offsets: Offsets::new(need.clone()), walls };
     for (k, side) in sides.iter().enumerate() {
         if !walls[k] {
             continue;
         }
-        need[k] = (0..=OFFSET_SAMPLES)
+        if k == 2 {
+            layout.offsets = Offsets::new(need.clone());
+        }
+        let at: Vec<(f64, f64)> = (0..=OFFSET_SAMPLES)
             .into_par_iter()
-            .map(|i| pocket.need(*side, i as f64 / OFFSET_SAMPLES as f64, opts.margin))
-            .collect::<Result<Vec<f64>>>()?;
+            .map(|i| pocket.need(*side, i as f64 / OFFSET_SAMPLES as f64, opts.margin, (k == 2).then_some(&layout)))
+            .collect::<Result<Vec<_>>>()?;
+        need[k] = resample(&at);
     }
     for (k, n) in need.iter().enumerate() {
         log::debug!(
@@ -518,7 +656,7 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
             n.iter().step_by(8).map(|x| (x * 1000.0).round() / 1000.0).collect::<Vec<_>>()
         );
     }
-    let mut layout = Layout { x_len, w, offsets: Offsets::new(need), walls };
+    layout.offsets = Offsets::new(need);
 
     let mut last = None;
     for _round in 0..5 {
@@ -536,10 +674,8 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
             }
             let Some(side) = side else { continue };
             let Some(w) = sides.iter().position(|s| *s == side) else { continue };
-            let uv = pt.uv;
-            let sp = at_floor(j, uv.x, uv.y);
-            let (along, across) = if side == Side::U1 { (uv.y, sp.su.length()) } else { (uv.x, sp.sv.length()) };
-            let deficit = (opts.margin - c) / across.max(1e-9) * 1.3 + 1e-4;
+            let along = pocket.map(side).at(pt.uv).foot;
+            let deficit = (opts.margin - c) * 1.3 + 1e-4;
             let i = (along.clamp(0.0, 1.0) * OFFSET_SAMPLES as f64).round() as usize;
             for d in deficits[w].iter_mut().take((i + 2).min(OFFSET_SAMPLES) + 1).skip(i.saturating_sub(2)) {
                 *d = d.max(deficit);
@@ -557,10 +693,16 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
                 .iter()
                 .enumerate()
                 .min_by(|a, b| a.1.0.total_cmp(&b.1.0))
-                .map(|(k, c)| (k, c.0, c.1, built.pts[k].uv));
+                .map(|(k, c)| (k, c.0, c.1, built.pts[k].uv, built.pts[k].before));
             log::debug!("five: round {_round}: too close to a wall, worst {worst:?}");
         }
-        let crowded = (0..=OFFSET_SAMPLES).any(|i| need[0][i] + need[1][i] > 0.9) || need[2].iter().any(|&b| b > 0.9);
+        // (the offsets against the width across, at each sample)
+        let crowded = (0..=OFFSET_SAMPLES).any(|i| {
+            let s = i as f64 / OFFSET_SAMPLES as f64;
+            let across = pocket.map(Side::V1).at(Side::V0.at(s)).d;
+            let along = pocket.map(Side::U0).at(Side::U1.at(s)).d;
+            need[0][i] + need[1][i] > 0.9 * across || need[2][i] > 0.9 * along
+        });
         if crowded {
             return Err(Error::job(
                 "tool",
@@ -575,6 +717,25 @@ pub fn plan(job: &FiveJob, opts: &FiveOptions) -> Result<FivePlan> {
     }
     let built = last.expect("one round at least");
     Ok(finish(&pocket, &layout, built, stretch))
+}
+
+/// Values at places along a wall, `(place, value)` in any order, at the offset samples'
+/// places: linear between them, held past the ends.
+fn resample(at: &[(f64, f64)]) -> Vec<f64> {
+    let mut at = at.to_vec();
+    at.sort_by(|a, b| a.0.total_cmp(&b.0));
+    (0..=OFFSET_SAMPLES)
+        .map(|i| {
+            let s = i as f64 / OFFSET_SAMPLES as f64;
+            let j = at.partition_point(|p| p.0 < s);
+            match (j.checked_sub(1).map(|i| at[i]), at.get(j)) {
+                (Some(a), Some(b)) if b.0 - a.0 > 1e-12 => a.1 + (b.1 - a.1) * (s - a.0) / (b.0 - a.0),
+                (Some(a), _) => a.1,
+                (None, Some(b)) => b.1,
+                (None, None) => 0.0,
+            }
+        })
+        .collect()
 }
 
 /// One point of the cut.
@@ -659,12 +820,13 @@ fn build(pocket: &Pocket, layout: &Layout, stepover: f64, opts: &FiveOptions) ->
     let rho = 0.5 * w;
     let r = pocket.prof.radius();
     let m = |q: DVec2| {
-        let uv = layout.to_floor(q);
+        let uv = layout.to_floor(pocket, q);
         at_floor(j, uv.x, uv.y).p
     };
     // the stretch along x, the greatest over each column of the domain
     let x_lo = -(2.0 * rho + 2.0 * r + 3.0);
-    let x_hi = x_len + 2.0 * r + 3.0;
+    // (past a wall at u = 1 only as far as the last shapes look: the path stops at it)
+    let x_hi = if layout.walls[2] { x_len + 1.5 } else { x_len + 2.0 * r + 3.0 };
     let col = 0.5;
     let ncol = ((x_hi - x_lo) / col).ceil() as usize + 1;
     // (and the greatest stretch in any direction, for shapes that change other than by a step)
@@ -759,9 +921,9 @@ fn build(pocket: &Pocket, layout: &Layout, stepover: f64, opts: &FiveOptions) ->
     }
     let place = |(k, t): (usize, f64)| -> Pt {
         let q = pieces[k].at(t);
-        let uv = layout.to_floor(q);
+        let uv = layout.to_floor(pocket, q);
         let (o, axis, lam) = pocket.place(uv.x, uv.y);
-        Pt { piece: k, t, before: DVec2::new(q.x / x_len, q.y / w), uv, o, lam, tip: o + axis * lam, axis }
+        Pt { piece: k, t, before: layout.domain(pocket, q), uv, o, lam, tip: o + axis * lam, axis }
     };
     if pts.len() > MAX_POINTS {
         return Err(Error::job(
@@ -907,6 +1069,49 @@ mod tests {
             length: 30.0,
             holder: None,
         }
+    }
+
+    #[test]
+    fn in_a_skewed_pocket_the_offset_holds_the_tool_off_every_wall_and_into_an_acute_corner() {
+        // a flat quadrilateral: v0 from (0, 0) to (40, 0), v1 from (0, 16) to (30, 16), and an
+        // end wall u1 from (40, 0) to (30, 16) meeting v0 at 58°: the floor's parameter lines
+        // cross u1 and v1 askew, so only a geodesic offset keeps the ball right off them
+        let plane = |z: f64| {
+            let k = vec![0.0, 0.0, 1.0, 1.0];
+            let p = vec![
+                vec![DVec3::new(0.0, 0.0, z), DVec3::new(0.0, 16.0, z)],
+                vec![DVec3::new(40.0, 0.0, z), DVec3::new(30.0, 16.0, z)],
+            ];
+            NurbsSurface::new(1, 1, k.clone(), k, p, None).expect("a plane")
+        };
+        let mut job = flat_channel(40.0, 16.0, 10.0, ball(6.0));
+        job.floor = plane(0.0);
+        job.top = plane(10.0);
+        job.boundaries = [Boundary::Open, Boundary::Wall(None), Boundary::Wall(None), Boundary::Wall(None)];
+        let p = plan(&job, &FiveOptions::default()).expect("planned");
+        // the distance in the plane from the line through a and b
+        let line = |t: DVec3, a: DVec2, b: DVec2| {
+            let (d, q) = ((b - a).normalize(), DVec2::new(t.x, t.y) - a);
+            (q.x * d.y - q.y * d.x).abs()
+        };
+        let (a, b) = (DVec2::new(40.0, 0.0), DVec2::new(30.0, 16.0));
+        let mut corner = f64::INFINITY;
+        let mut near = [f64::INFINITY; 3];
+        for m in p.moves.iter().filter(|m| !m.rapid) {
+            let d = [m.tip.y, line(m.tip, a, b), 16.0 - m.tip.y];
+            // the ball's radius and the margin off each wall, less a hair for the floor's grid
+            for (k, dk) in d.iter().enumerate() {
+                assert!(*dk >= 3.0 + 0.02, "wall {k}: tip at {:?}, {dk:.3} from it", m.tip);
+                near[k] = near[k].min(*dk);
+            }
+            if m.tip.x > 20.0 {
+                corner = corner.min(d[0].max(d[1]));
+            }
+        }
+        // and it reaches each wall, and into the acute corner, not held off farther than the
+        // offset needs
+        assert!(near.iter().all(|&n| n < 3.3), "nearest to the walls {near:?}");
+        assert!(corner < 3.3, "in the corner the tip stays {corner:.3} from one wall");
     }
 
     #[test]
