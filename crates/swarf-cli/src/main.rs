@@ -1281,16 +1281,7 @@ fn five(a: FiveArgs) -> Result<(), Failure> {
         files.push(OutputFile::new(g, p.gcode.clone().into_bytes()));
     }
     if let Some(path) = &a.picture {
-        use swarf::plot::five::{FivePicture, svg};
-        let tips: Vec<_> = p.plan.moves.iter().map(|m| m.tip).collect();
-        let title = format!(
-            "{}: {} rounded shapes, {:.0} mm of cut, {:.1} min",
-            job.name, p.plan.shapes, p.length.0, p.time_min
-        );
-        let text = svg(
-            &job,
-            &FivePicture { title, before: &p.plan.before, after: &p.plan.params, tips: &tips, shape: &p.plan.shape_of },
-        );
+        let text = p.picture_svg(&job);
         let bytes = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
             swarf::plot::png(&text)?
         } else {

@@ -27,6 +27,23 @@ fn the_help_lists_the_gcode_option() {
 }
 
 #[test]
+fn the_picture_draws_the_four_views_of_the_plan() {
+    let dir = TempDir::new("five-picture");
+    let case = example();
+    let out = swarf(dir.path(), &["five", case.to_str().expect("utf-8"), "-o", "out.cl", "--picture", "out.svg"]);
+    assert!(out.status.success(), "swarf five failed: {}", String::from_utf8_lossy(&out.stderr));
+    let svg = std::fs::read_to_string(dir.path().join("out.svg")).expect("the picture");
+    assert!(svg.contains("<svg") && svg.trim_end().ends_with("</svg>"), "{}", &svg[..200.min(svg.len())]);
+    for view in ["shapes between the walls", "after the variable offset", "on the floor", "the field V"] {
+        assert!(svg.contains(view), "no view {view:?}");
+    }
+    // titled with the plan's own figures, as the command reports them
+    let said = String::from_utf8_lossy(&out.stdout);
+    let shapes = said.split(": ").nth(1).and_then(|t| t.split(' ').next()).expect("the shapes in the report");
+    assert!(svg.contains(&format!("{shapes} rounded shapes")), "{said}");
+}
+
+#[test]
 fn the_example_channel_is_pocketed_and_rs274_reads_its_gcode() {
     let dir = TempDir::new("five-e2e");
     let case = example();

@@ -39,3 +39,27 @@ pub fn run(job: &FiveJob, opts: &FiveOptions) -> Result<FiveProgram> {
     let time_min = cut / job.feed + rapid / job.rapid_rate;
     Ok(FiveProgram { plan, cl, gcode, planning_s, length: (cut, rapid), time_min })
 }
+
+impl FiveProgram {
+    /// The picture of the plan as SVG ([`crate::plot::five`]): the shapes in the domain before
+    /// and after the variable offset, the path on the floor and the orientation field, titled
+    /// with the job's name, the shapes, the cut and the machining time.
+    pub fn picture_svg(&self, job: &FiveJob) -> String {
+        use crate::plot::five::{FivePicture, svg};
+        let tips: Vec<_> = self.plan.moves.iter().map(|m| m.tip).collect();
+        let title = format!(
+            "{}: {} rounded shapes, {:.0} mm of cut, {:.1} min",
+            job.name, self.plan.shapes, self.length.0, self.time_min
+        );
+        svg(
+            job,
+            &FivePicture {
+                title,
+                before: &self.plan.before,
+                after: &self.plan.params,
+                tips: &tips,
+                shape: &self.plan.shape_of,
+            },
+        )
+    }
+}
