@@ -31,7 +31,7 @@
 //! and so is an offset built from them.
 //!
 //! No crate computes geodesic distance over a parametric surface patch given as a point grid
-//! with carried labels, so this is written here (about 150 lines).
+//! with carried labels, so this is written here.
 
 use crate::geom::{DVec2, DVec3};
 use crate::model::five::Side;
