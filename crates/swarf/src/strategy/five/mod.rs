@@ -70,7 +70,7 @@ use crate::geom::nurbs::SurfacePoint;
 use crate::geom::{DVec2, DVec3};
 use crate::model::five::{Boundary, CutterKind, FiveJob, Side};
 use crate::post::five::AxisMove;
-use geodesic::{DistanceMap, Lattice};
+use geodesic::{DistanceMap, Lattice, Reading};
 use place::{FloorGrid, Profile, WallCloud, dist_polyline, polyline_len};
 use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -328,36 +328,24 @@ impl Pocket {
 
     /// The geodesic distance map of `side`.
     fn map(&self, side: Side) -> &DistanceMap {
-        &self.maps[Side::ALL.iter().position(|s| *s == side).expect("a side")]
+        &self.maps[side_index(side)]
     }
 
-    /// The pocket's two geodesic coordinates at `p` and their gradients, with weights `k`
-    /// (the share of the v0 side and the share of the u0 side, held fixed while a point
-    /// moves): across, `k.x d(v0) − (1 − k.x) d(v1)`, and along, `k.y d(u0) − (1 − k.y) d(u1)`
-    /// (signed distances, mm). Each grows by a millimetre when a point moves a millimetre away
-    /// from the first side of its pair; near one side it is (plus or minus) the distance from
-    /// that side alone, whatever the angle of the other.
+    /// The four maps read at `p`, in `Side::ALL`'s order (u0, u1, v0, v1).
+    fn read(&self, p: DVec2) -> [Reading; 4] {
+        self.maps.each_ref().map(|m| m.at(p))
+    }
+
+    /// The pocket's two geodesic coordinates at `p` and their gradients ([`coords_of`]).
     fn coords(&self, p: DVec2, k: DVec2) -> (DVec2, DVec2, DVec2) {
-        let [u0, u1, v0, v1] = [Side::U0, Side::U1, Side::V0, Side::V1].map(|s| self.map(s).at(p));
-        (
-            DVec2::new(k.x * v0.d - (1.0 - k.x) * v1.d, k.y * u0.d - (1.0 - k.y) * u1.d),
-            v0.grad * k.x - v1.grad * (1.0 - k.x),
-            u0.grad * k.y - u1.grad * (1.0 - k.y),
-        )
-    }
-
-    /// Each side's share of `p` against its opposite side: `d(v1) / (d(v0) + d(v1))` for v0,
-    /// `d(u1) / (d(u0) + d(u1))` for u0 (1 on the side, 0 on the opposite one).
-    fn shares(&self, p: DVec2) -> DVec2 {
-        let [u0, u1, v0, v1] = [Side::U0, Side::U1, Side::V0, Side::V1].map(|s| self.map(s).at(p).d);
-        DVec2::new(v1 / (v0 + v1).max(1e-9), u1 / (u0 + u1).max(1e-9))
+        coords_of(&self.read(p), k)
     }
 
     /// `out` moved along the line of its across coordinate (weights `k`) to where the along
-    /// coordinate is that of `p` less `t`: the end wall's push of `p` by `t`, after the side
-    /// walls' pushes took it to `out`.
-    fn slide(&self, p: DVec2, k: DVec2, out: DVec2, t: f64) -> DVec2 {
-        self.solve(out, k, DVec2::new(self.coords(out, k).0.x, self.coords(p, k).0.y - t))
+    /// coordinate is `along`: the end wall's push, after the side walls' pushes took the point
+    /// to `out`.
+    fn slide(&self, k: DVec2, out: DVec2, along: f64) -> DVec2 {
+        self.solve(out, k, DVec2::new(self.coords(out, k).0.x, along))
     }
 
     /// The point near `start` where the coordinates weighted by `k` are `target`: three Newton
@@ -385,10 +373,12 @@ impl Pocket {
     /// pushes (`layout`), along the line they leave it on.
     fn need(&self, side: Side, s: f64, margin: f64, layout: Option<&Layout>) -> Result<(f64, f64)> {
         let p0 = side.at(s);
-        let step = unit_step(&at_floor(&self.canon.job, p0.x, p0.y), self.map(side).at(p0).grad);
-        let k = self.shares(p0);
-        let base = layout.map_or(p0, |l| l.across(self, p0, k, None));
-        let to = |t: f64| if side == Side::U1 { self.slide(p0, k, base, t) } else { p0 + step * t };
+        let (r0, sp0) = (self.read(p0), at_floor(&self.canon.job, p0.x, p0.y));
+        let step = unit_step(&sp0, r0[side_index(side)].grad);
+        let k = shares_of(&r0);
+        let along = coords_of(&r0, k).0.y;
+        let base = layout.map_or(p0, |l| l.across(self, p0, &sp0, &r0, k, None));
+        let to = |t: f64| if side == Side::U1 { self.slide(k, base, along - t) } else { p0 + step * t };
         let foot = |t: f64| if side == Side::U1 { self.map(side).at(to(t)).foot } else { s };
         let clear = |t: f64| {
             let p = to(t);
@@ -419,6 +409,34 @@ impl Pocket {
         }
         Ok((foot(hi), hi))
     }
+}
+
+/// The index of `side` in `Side::ALL` (and in the pocket's maps).
+fn side_index(side: Side) -> usize {
+    Side::ALL.iter().position(|s| *s == side).expect("a side")
+}
+
+/// The pocket's two geodesic coordinates and their gradients from the maps' readings `r` at a
+/// point, with weights `k` (the share of the v0 side and the share of the u0 side, held fixed
+/// while a point moves): across, `k.x d(v0) − (1 − k.x) d(v1)`, and along,
+/// `k.y d(u0) − (1 − k.y) d(u1)` (signed distances, mm). Each grows by a millimetre when a
+/// point moves a millimetre away from the first side of its pair; near one side it is (plus
+/// or minus) the distance from that side alone, whatever the angle of the other.
+fn coords_of(r: &[Reading; 4], k: DVec2) -> (DVec2, DVec2, DVec2) {
+    let [u0, u1, v0, v1] = r;
+    (
+        DVec2::new(k.x * v0.d - (1.0 - k.x) * v1.d, k.y * u0.d - (1.0 - k.y) * u1.d),
+        v0.grad * k.x - v1.grad * (1.0 - k.x),
+        u0.grad * k.y - u1.grad * (1.0 - k.y),
+    )
+}
+
+/// Each side's share of a point against its opposite side, from the maps' readings `r` there:
+/// `d(v1) / (d(v0) + d(v1))` for v0, `d(u1) / (d(u0) + d(u1))` for u0 (1 on the side, 0 on
+/// the opposite one).
+fn shares_of(r: &[Reading; 4]) -> DVec2 {
+    let [u0, u1, v0, v1] = r.map(|x| x.d);
+    DVec2::new(v1 / (v0 + v1).max(1e-9), u1 / (u0 + u1).max(1e-9))
 }
 
 /// The parameter step at `sp` that moves one millimetre on the floor along the gradient
@@ -530,30 +548,41 @@ impl Layout {
     /// their gradients are smooth, and so is this map, which keeps the path C¹.
     fn to_floor(&self, pocket: &Pocket, q: DVec2) -> DVec2 {
         let p = self.domain(pocket, q);
-        let k = pocket.shares(p);
-        let out = self.across(pocket, p, k, None);
+        let r = pocket.read(p);
+        let sp = at_floor(&pocket.canon.job, p.x, p.y);
+        let k = shares_of(&r);
+        let out = self.across(pocket, p, &sp, &r, k, None);
         if !self.walls[2] {
             return out;
         }
+        let along = coords_of(&r, k).0.y;
         let mut at = out;
         for pass in 0..2 {
-            let base = if pass == 0 { out } else { self.across(pocket, p, k, Some(at)) };
+            let base = if pass == 0 { out } else { self.across(pocket, p, &sp, &r, k, Some(at)) };
             let push = self.offsets.smooth[2].eval(pocket.map(Side::U1).at(at).foot) * (1.0 - k.y);
-            at = pocket.slide(p, k, base, push);
+            at = pocket.slide(k, base, along - push);
         }
         at
     }
 
-    /// `p` pushed by the side walls, with the shares `k` at `p`; their offsets read at the
-    /// feet of `at` (where the point ends), or of `p`.
-    fn across(&self, pocket: &Pocket, p: DVec2, k: DVec2, at: Option<DVec2>) -> DVec2 {
-        let sp = at_floor(&pocket.canon.job, p.x, p.y);
+    /// `p` pushed by the side walls, with the floor `sp`, the maps' readings `r` and the
+    /// shares `k` at `p`; their offsets read at the feet of `at` (where the point ends), or
+    /// of `p`.
+    fn across(
+        &self,
+        pocket: &Pocket,
+        p: DVec2,
+        sp: &SurfacePoint,
+        r: &[Reading; 4],
+        k: DVec2,
+        at: Option<DVec2>,
+    ) -> DVec2 {
         let mut out = p;
         for (i, side, share) in [(0, Side::V0, k.x), (1, Side::V1, 1.0 - k.x)] {
             if self.walls[i] {
-                let r = pocket.map(side).at(p);
-                let foot = at.map_or(r.foot, |a| pocket.map(side).at(a).foot);
-                out += unit_step(&sp, r.grad) * (self.offsets.smooth[i].eval(foot) * share);
+                let ri = &r[side_index(side)];
+                let foot = at.map_or(ri.foot, |a| pocket.map(side).at(a).foot);
+                out += unit_step(sp, ri.grad) * (self.offsets.smooth[i].eval(foot) * share);
             }
         }
         out
