@@ -4,6 +4,7 @@
 pub mod case;
 pub mod drawing;
 pub mod five;
+pub mod gcode;
 pub mod output;
 pub mod stl;
 

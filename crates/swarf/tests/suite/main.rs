@@ -9,6 +9,7 @@ mod architecture;
 mod determinism;
 mod engagement;
 mod five;
+mod gcode_read;
 mod links;
 mod medial;
 mod options;
