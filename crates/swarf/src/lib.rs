@@ -32,6 +32,7 @@
 //! Each folder uses only the ones below it:
 //!
 //! ```text
+//!  view      the program viewer: one self-contained HTML page (three.js) the page a user looks at
 //!  job       rough (2.5D)   zlevel (3D)   toolseq (tool sequence)        the jobs a user runs
 //!  strategy  adaptive  offset  zigzag  medial  spiral (+ its search)    what the tool does at a level
 //!  plan      linker (entries, links, retracts)   levels (the driver)   pass types, LinkOptions
@@ -55,7 +56,10 @@
 //!   level driver;
 //! - [`strategy`]: the five clearing strategies, and 5-axis pocketing over a NURBS floor
 //!   ([`strategy::five`], paper 2 §2);
-//! - [`job`]: rough, z-level, tool-sequence and 5-axis jobs.
+//! - [`job`]: rough, z-level, tool-sequence and 5-axis jobs;
+//! - [`view`]: the program viewer, one self-contained HTML page: the path in 3D over the
+//!   stock, part and fixtures, played back while the stock is cut, the engagement chart linked
+//!   to it.
 //!
 //! Progress and timings are logged through the [`log`] crate (`debug` and `trace` levels); a
 //! program that wants them installs a logger.
@@ -76,6 +80,7 @@ pub mod report;
 pub mod sim;
 pub mod strategy;
 pub mod toolpath;
+pub mod view;
 
 pub use error::{Error, Result, Setting};
 pub use io::{Input, Overrides, example_job, load_input, load_job};

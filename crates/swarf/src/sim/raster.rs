@@ -1091,6 +1091,16 @@ impl RasterSim {
         &self.s
     }
 
+    /// Stock heights before the first cut (row-major, −∞ where there is no stock).
+    pub fn initial_heights(&self) -> &[f32] {
+        &self.s0
+    }
+
+    /// Volume cut away so far, mm³ (what a replay reports as its removed volume).
+    pub fn removed_volume(&self) -> f64 {
+        <Self as super::replay::Engine>::removed_volume(self)
+    }
+
     /// The reachable material standing more than `eps` above `z`, as an area (rows of cells
     /// merged into rectangles).
     pub fn material_area(&self, z: f64) -> Area {

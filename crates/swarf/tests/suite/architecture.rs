@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 /// The folders (and top-level files) bottom up; a module may import its own layer and the ones
 /// below.
-const LAYERS: [&[&str]; 8] = [
+const LAYERS: [&[&str]; 9] = [
     &["error", "limits", "geom"],
     &["model", "implicit"],
     &["toolpath"],
@@ -22,6 +22,7 @@ const LAYERS: [&[&str]; 8] = [
     &["plan", "io", "report", "plot"],
     &["strategy"],
     &["job"],
+    &["view"],
     &["lib"],
 ];
 

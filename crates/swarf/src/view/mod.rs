@@ -1,0 +1,1016 @@
+//! The viewer: one self-contained HTML page that shows a program in 3D over its stock, part and
+//! fixtures, plays it back while the stock is cut away, and links the engagement chart to the
+//! path both ways.
+//!
+//! The page works from `file://` with no network: three.js (MIT, bundled with its orbit
+//! controls, `three.bundle.js`) and the viewer's own script are inlined, and the program's data
+//! are packed as typed arrays ([`pack`]), gzip-compressed and base64-encoded into the page.
+//!
+//! What a page holds (a [`Scene`]):
+//!
+//! - **runs**: one or more sequences of programs, each replayed on a fresh stock: `swarf rough`
+//!   makes one run of one program, `swarf plan` one run of one program per tool (each on what
+//!   the tools before it left), `swarf view A.ngc B.ngc` one run per program, to compare them;
+//! - per program, every move (end point, arc centre, kind, feed, the G-code line it came from,
+//!   its level, its largest engagement), the engagement chart (the simulator's samples in
+//!   buckets, each the largest engagement in it and the move where it was), the gouges,
+//!   plunges and rapid collisions the simulator found, the rest material, and the figures of
+//!   the report;
+//! - the **stock field**: the simulator's heights (its cells in blocks, a block read at its
+//!   centre) before the first cut, of what must stay, and after the run, which the page lowers
+//!   as it plays the moves (a flat end mill's sweep, computed in the page) and shows as a mesh;
+//! - the simulator's **removed volume** after every 64th of each run's moves, which the page
+//!   shows beside its own and the browser tests compare;
+//! - **solids**: fixtures as extruded outlines, an STL part as its triangles.
+//!
+//! The method and the page's controls are described in `docs/viewer.md`.
+
+mod pack;
+
+use crate::error::Result;
+use crate::geom::{Area, DVec2, DVec3};
+use crate::job::rough::RoughResult;
+use crate::model::{Job, MeshJob};
+use crate::report::Report;
+use crate::sim::raster::RasterSim;
+use crate::sim::{Event, Replay, Sample, SampleKind, SimOptions};
+use crate::toolpath::{Motion, MoveKind, Toolpath, move_length};
+use pack::Pack;
+
+/// The most cells of the page's stock field (the simulator's cells are taken in blocks to stay
+/// under it): 600 × 600.
+pub const MAX_FIELD_CELLS: usize = 360_000;
+
+/// The most buckets of a program's engagement chart.
+pub const CHART_BUCKETS: usize = 12_000;
+
+/// Into how many parts a run's moves are cut for the simulator's removed-volume readings.
+pub const REMOVAL_STEPS: usize = 64;
+
+/// The most rest-material points drawn per program.
+const MAX_REST_POINTS: usize = 40_000;
+
+/// One program as the page shows it.
+#[derive(Debug, Clone)]
+pub struct ProgramView {
+    /// Its name (a file name, or the tool).
+    pub name: String,
+    /// The moves.
+    pub toolpath: Toolpath,
+    /// The G-code line (1-based) each move came from, or empty when unknown.
+    pub lines: Vec<u32>,
+    /// The G-code text, shown beside the selected move (none: not shown).
+    pub gcode: Option<String>,
+    /// The simulator's engagement samples.
+    pub samples: Vec<Sample>,
+    /// The reference engagement, degrees (drawn on the chart).
+    pub ref_deg: Option<f64>,
+    /// Gouges the simulator found.
+    pub gouges: Vec<Event>,
+    /// Plunges into material.
+    pub plunges: Vec<Event>,
+    /// Rapids through material.
+    pub rapid_collisions: Vec<Event>,
+    /// Centres of the cells of rest material.
+    pub rest: Vec<DVec2>,
+    /// The report's figures, as label and value.
+    pub figures: Vec<(String, String)>,
+    /// The tool axis at the end of each move (5-axis programs), unit vectors.
+    pub axes: Option<Vec<DVec3>>,
+}
+
+/// Programs replayed one after the other on one stock.
+#[derive(Debug, Clone)]
+pub struct Run {
+    /// Its name.
+    pub name: String,
+    /// The programs, in cutting order.
+    pub programs: Vec<ProgramView>,
+    /// The simulator's removed volume (mm³) after so many of the run's moves (counted over its
+    /// programs), from 0 to all.
+    pub removal: Vec<(u32, f64)>,
+    /// The simulator's stock heights after the run, on the field's cells (NaN: no stock).
+    pub end: Option<Vec<f32>>,
+}
+
+/// The stock as heights over a grid of square cells.
+#[derive(Debug, Clone)]
+pub struct Field {
+    /// x of the left edge of column 0, mm.
+    pub x0: f64,
+    /// y of the bottom edge of row 0, mm.
+    pub y0: f64,
+    /// The side of a cell, mm.
+    pub res: f64,
+    /// Columns.
+    pub nx: usize,
+    /// Rows.
+    pub ny: usize,
+    /// Stock heights before any cut, row-major (NaN: no stock).
+    pub start: Vec<f32>,
+    /// Heights of what must stay (NaN: nothing).
+    pub part: Vec<f32>,
+    /// The lowest the stock goes (drawn as its bottom), mm.
+    pub bottom: f64,
+}
+
+/// A solid drawn as it is (it does not change).
+#[derive(Debug, Clone)]
+pub enum Solid {
+    /// An outline extruded from `z0` to `z1`.
+    Extrusion {
+        /// What it is: "part", "fixture" or "stock".
+        kind: &'static str,
+        /// The outline.
+        area: Area,
+        /// Bottom, mm.
+        z0: f64,
+        /// Top, mm.
+        z1: f64,
+    },
+    /// Triangles.
+    Mesh {
+        /// What it is.
+        kind: &'static str,
+        /// The triangles.
+        tris: Vec<[DVec3; 3]>,
+    },
+}
+
+/// Everything one page shows.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The page's title.
+    pub title: String,
+    /// The runs (at least one).
+    pub runs: Vec<Run>,
+    /// The stock field, when the job has one (a 5-axis program has none).
+    pub field: Option<Field>,
+    /// Solids.
+    pub solids: Vec<Solid>,
+    /// Lines said under the title (what was read, what is left out).
+    pub notes: Vec<String>,
+}
+
+/// The figures of a report worth a glance, as label and value.
+pub fn figures_of(r: &Report) -> Vec<(String, String)> {
+    let mut f = vec![
+        ("strategy".to_string(), r.strategy.clone()),
+        ("tool".to_string(), format!("Ø{} mm", r.tool_diameter_mm)),
+        ("machining time".to_string(), format!("{:.2} min", r.time_min)),
+        ("cutting length".to_string(), format!("{:.2} m", r.cut_length_mm / 1000.0)),
+        ("rapid length".to_string(), format!("{:.2} m", r.rapid_length_mm / 1000.0)),
+        ("moves".to_string(), format!("{} ({} arcs)", r.moves.total, r.moves.arcs)),
+        ("levels".to_string(), r.levels.len().to_string()),
+    ];
+    if r.engagement_ref_deg > 0.0 {
+        f.push(("reference engagement".into(), format!("{:.1}°", r.engagement_ref_deg)));
+    }
+    if r.simulated {
+        let e = &r.engagement_deg;
+        f.extend([
+            ("engagement max / p95 / mean".to_string(), format!("{:.0}° / {:.0}° / {:.1}°", e.max, e.p95, e.mean)),
+            (
+                format!("above ref + 20° ({:.0}°)", r.above_ref_plus_20.threshold_deg),
+                format!("{:.1} mm", r.above_ref_plus_20.length_mm),
+            ),
+            ("air cutting".to_string(), format!("{:.1} %", r.air_cut_fraction * 100.0)),
+            ("plunges".to_string(), r.plunges.to_string()),
+            ("entries".to_string(), r.entries.to_string()),
+            ("gouges".to_string(), format!("{} (deepest {:.3} mm)", r.gouges, r.gouge_max_mm)),
+            ("rapid collisions".to_string(), r.rapid_collisions.to_string()),
+            ("rest".to_string(), format!("{:.2} % of the reachable area", r.rest_fraction * 100.0)),
+            ("removed".to_string(), format!("{:.1} cm³", r.removed_volume_mm3 / 1000.0)),
+            ("efficiency".to_string(), format!("{:.0} %", r.efficiency * 100.0)),
+            ("simulation cell".to_string(), format!("{} mm", r.sim_res_mm)),
+        ]);
+    } else {
+        f.push(("simulated".into(), "no".into()));
+    }
+    f
+}
+
+/// The G-code line of each move of `tp`, read back from `gcode` (the program `tp` was posted
+/// as): each move takes the line of the next move read that ends where it ends (a move the
+/// post wrote as several, or left out as too short, takes the line of its last piece, or of
+/// the move before it); empty when fewer than nine in ten moves are found.
+pub fn lines_of(gcode: &str, tp: &Toolpath) -> Vec<u32> {
+    let opts = crate::io::gcode::ReadOptions { tool: tp.tool.clone(), clearance_z: Some(tp.clearance_z) };
+    let Ok(read) = crate::io::gcode::read(gcode, std::path::Path::new("program.ngc"), &opts) else {
+        return Vec::new();
+    };
+    let got = &read.toolpath.moves;
+    let mut out = Vec::with_capacity(tp.moves.len());
+    let (mut j, mut found, mut last) = (0usize, 0usize, 0u32);
+    for m in &tp.moves {
+        // (the post writes coordinates to the micrometre)
+        let hit = (j..(j + 16).min(got.len())).find(|&k| got[k].to.distance(m.to) < 2e-3);
+        if let Some(k) = hit {
+            last = read.lines[k];
+            j = k + 1;
+            found += 1;
+        }
+        out.push(last);
+    }
+    if found * 10 < tp.moves.len() * 9 { Vec::new() } else { out }
+}
+
+/// The field of a model: its cells in blocks of `f` × `f` (the fewest that keep the field
+/// under [`MAX_FIELD_CELLS`]), each read at its centre.
+fn field_of(model: &RasterSim, bottom: f64) -> (Field, usize) {
+    let g = model.grid;
+    let f = ((g.nx * g.ny) as f64 / MAX_FIELD_CELLS as f64).sqrt().ceil().max(1.0) as usize;
+    let (nx, ny) = (g.nx.div_ceil(f), g.ny.div_ceil(f));
+    let finite = |v: f32| if v.is_finite() { v } else { f32::NAN };
+    let start = blocks(&g, model.initial_heights(), f, nx, ny).map(finite).collect();
+    let part = blocks(&g, model.part_heights(), f, nx, ny).map(finite).collect();
+    (Field { x0: g.x0, y0: g.y0, res: g.res * f as f64, nx, ny, start, part, bottom }, f)
+}
+
+/// The values of `v` (over `g`) at the centres of blocks of `f` × `f` cells.
+fn blocks<'a>(
+    g: &crate::sim::grid::Grid,
+    v: &'a [f32],
+    f: usize,
+    nx: usize,
+    ny: usize,
+) -> impl Iterator<Item = f32> + 'a {
+    let (gnx, gny) = (g.nx, g.ny);
+    (0..ny).flat_map(move |j| {
+        (0..nx).map(move |i| {
+            let (a, b) = ((i * f + f / 2).min(gnx - 1), (j * f + f / 2).min(gny - 1));
+            v[b * gnx + a]
+        })
+    })
+}
+
+/// The heights of `model` on the cells of `field` (its grid cut into blocks of `f` at the same
+/// corner), NaN where there is no stock.
+fn end_of(model: &RasterSim, field: &Field) -> Vec<f32> {
+    let g = model.grid;
+    let mut out = Vec::with_capacity(field.nx * field.ny);
+    for j in 0..field.ny {
+        for i in 0..field.nx {
+            let c = DVec2::new(field.x0 + (i as f64 + 0.5) * field.res, field.y0 + (j as f64 + 0.5) * field.res);
+            let v = g.cell_of(c).map_or(f32::NAN, |(a, b)| model.heights()[b * g.nx + a]);
+            out.push(if v.is_finite() { v } else { f32::NAN });
+        }
+    }
+    out
+}
+
+/// The move counts after which the removed volume is read: `REMOVAL_STEPS` + 1 of them, from
+/// 0 to `n`.
+fn removal_marks(n: usize) -> Vec<usize> {
+    let mut v: Vec<usize> = (0..=REMOVAL_STEPS).map(|i| (i * n + REMOVAL_STEPS / 2) / REMOVAL_STEPS).collect();
+    v.dedup();
+    v
+}
+
+/// Cuts `tp` on `model` (no measurements), reading the removed volume at the run's marks that
+/// fall in it; `before` moves of the run come before `tp`, and `base` mm³ were removed by them.
+fn cut_reading(model: &mut RasterSim, tp: &Toolpath, marks: &[usize], before: usize, base: f64) -> Vec<(u32, f64)> {
+    let mut out = Vec::new();
+    let mut done = 0;
+    let mut at = tp.start;
+    for &m in marks.iter().filter(|&&m| m >= before && m <= before + tp.moves.len()) {
+        let upto = m - before;
+        if upto > done {
+            model.cut_moves(at, &tp.moves[done..upto]);
+            at = tp.moves[upto - 1].to;
+            done = upto;
+        }
+        out.push((m as u32, base + model.removed_volume()));
+    }
+    if done < tp.moves.len() {
+        model.cut_moves(at, &tp.moves[done..]);
+    }
+    out
+}
+
+/// Replays `tp` on `model` in pieces, reading the removed volume at the run's marks in it
+/// (as [`cut_reading`]); the samples and events come back as one replay of the whole program
+/// (lengths and move indices from its start).
+fn replay_reading(
+    model: &mut RasterSim,
+    tp: &Toolpath,
+    marks: &[usize],
+    before: usize,
+    base: f64,
+) -> (Replay, Vec<(u32, f64)>) {
+    let mut all = Replay::default();
+    let mut out = Vec::new();
+    let mut done = 0usize;
+    let mut s_off = 0.0;
+    let mut at = tp.start;
+    let mut cuts: Vec<usize> =
+        marks.iter().filter(|&&m| m >= before && m <= before + tp.moves.len()).map(|&m| m - before).collect();
+    if cuts.last() != Some(&tp.moves.len()) {
+        cuts.push(tp.moves.len());
+    }
+    for upto in cuts {
+        if upto > done {
+            let part = Toolpath {
+                tool: tp.tool.clone(),
+                start: at,
+                clearance_z: tp.clearance_z,
+                moves: tp.moves[done..upto].to_vec(),
+                notes: Vec::new(),
+            };
+            let rp = model.replay(&part, &mut |_| {});
+            all.samples.extend(rp.samples.iter().map(|s| Sample { s: s.s + s_off, mi: s.mi + done as u32, ..*s }));
+            let shift =
+                |v: &[Event]| v.iter().map(|e| Event { move_index: e.move_index + done, ..*e }).collect::<Vec<_>>();
+            all.gouges.extend(shift(&rp.gouges));
+            all.plunges.extend(shift(&rp.plunges));
+            all.rapid_collisions.extend(shift(&rp.rapid_collisions));
+            s_off += part.segments().filter(|(_, m)| !m.is_rapid()).map(|(a, m)| move_length(a, m)).sum::<f64>();
+            at = part.end();
+            done = upto;
+        }
+        if marks.contains(&(before + upto)) {
+            out.push(((before + upto) as u32, base + model.removed_volume()));
+        }
+    }
+    all.removed_volume = model.removed_volume();
+    all.res = model.grid.res;
+    (all, out)
+}
+
+impl ProgramView {
+    /// A program as planned and proven: `tp` with its G-code, the replay's samples and events,
+    /// and the report's figures.
+    pub fn of(name: impl Into<String>, tp: &Toolpath, gcode: &str, replay: Option<&Replay>, report: &Report) -> Self {
+        let lines = lines_of(gcode, tp);
+        let mut v = ProgramView {
+            name: name.into(),
+            toolpath: tp.clone(),
+            lines,
+            gcode: Some(gcode.to_string()),
+            samples: Vec::new(),
+            ref_deg: (report.engagement_ref_deg > 0.0).then_some(report.engagement_ref_deg),
+            gouges: Vec::new(),
+            plunges: Vec::new(),
+            rapid_collisions: Vec::new(),
+            rest: Vec::new(),
+            figures: figures_of(report),
+            axes: None,
+        };
+        if let Some(rp) = replay {
+            v.take_replay(rp);
+        }
+        v
+    }
+
+    fn take_replay(&mut self, rp: &Replay) {
+        self.samples = rp.samples.clone();
+        self.gouges = rp.gouges.clone();
+        self.plunges = rp.plunges.clone();
+        self.rapid_collisions = rp.rapid_collisions.clone();
+        let step = rp.rest_cells.len().div_ceil(MAX_REST_POINTS).max(1);
+        self.rest = rp.rest_cells.iter().step_by(step).copied().collect();
+    }
+}
+
+/// The page of a 2.5D job's program (`swarf rough` on a case or a drawing): the stock field
+/// from a model of the job on the simulator's cells (`sim`, as the proof fitted it), the
+/// removed volume read along the program, fixtures as solids.
+pub fn of_rough(job: &Job, res: &RoughResult, sim: &SimOptions) -> Result<Scene> {
+    let sim =
+        proof_cells(sim, &res.report).unwrap_or_else(|| fitted(sim, job.cutting.tool.diameter, job.stock.bounds()));
+    let regions = job.regions(job.radius(), 0.0)?;
+    let mut model = RasterSim::new(job, &regions, &sim)?;
+    model.track_exact = false;
+    let (field, _) = field_of(&model, job.floor);
+    let marks = removal_marks(res.toolpath.moves.len());
+    let removal = cut_reading(&mut model, &res.toolpath, &marks, 0, 0.0);
+    let end = end_of(&model, &field);
+    let program =
+        ProgramView::of(res.report.input.clone(), &res.toolpath, &res.gcode, res.replay.as_ref(), &res.report);
+    let mut solids = Vec::new();
+    if !job.fixtures.polys.is_empty() {
+        solids.push(Solid::Extrusion {
+            kind: "fixture",
+            area: job.fixtures.clone(),
+            z0: job.floor,
+            z1: job.stock_top.max(job.part_top) + 0.25 * (job.stock_top - job.floor).abs().max(1.0),
+        });
+    }
+    Ok(Scene {
+        title: format!("{} — {}", res.report.input, res.report.strategy),
+        runs: vec![Run { name: res.report.input.clone(), programs: vec![program], removal, end: Some(end) }],
+        field: Some(field),
+        solids,
+        notes: Vec::new(),
+    })
+}
+
+/// The page of a 3D job's program (`swarf rough` on an STL part): the part's triangles, the
+/// stock field of the mesh model.
+pub fn of_mesh_rough(job: &MeshJob, res: &RoughResult, sim: &SimOptions) -> Result<Scene> {
+    let sim = proof_cells(sim, &res.report).unwrap_or_else(|| {
+        fitted(sim, job.cutting.tool.diameter, Some((job.stock_lo.truncate(), job.stock_hi.truncate())))
+    });
+    let mut model = crate::sim::heights::mesh_model(job, &sim)?;
+    model.track_exact = false;
+    let (field, _) = field_of(&model, job.floor);
+    let marks = removal_marks(res.toolpath.moves.len());
+    let removal = cut_reading(&mut model, &res.toolpath, &marks, 0, 0.0);
+    let end = end_of(&model, &field);
+    let program =
+        ProgramView::of(res.report.input.clone(), &res.toolpath, &res.gcode, res.replay.as_ref(), &res.report);
+    Ok(Scene {
+        title: format!("{} — {}", res.report.input, res.report.strategy),
+        runs: vec![Run { name: res.report.input.clone(), programs: vec![program], removal, end: Some(end) }],
+        field: Some(field),
+        solids: vec![Solid::Mesh { kind: "part", tris: job.mesh.tris.clone() }],
+        notes: Vec::new(),
+    })
+}
+
+/// The page of a tool sequence (`swarf plan`): one run of its programs, each replayed on what
+/// the ones before it left (as the plan's own check does), a tool per colour. `programs` are
+/// the plan's programs with their G-code; `reports` their figures.
+pub fn of_plan(
+    job: &MeshJob,
+    programs: &[(&Toolpath, String, String)],
+    sim: &SimOptions,
+    title: impl Into<String>,
+) -> Result<Scene> {
+    let smallest = programs.iter().map(|p| p.0.tool.diameter).fold(f64::INFINITY, f64::min);
+    let sim = SimOptions { res: Some(sim.res_for(smallest)), ..sim.clone() };
+    let total: usize = programs.iter().map(|p| p.0.moves.len()).sum();
+    let marks = removal_marks(total);
+    let mut removal = Vec::new();
+    let mut field: Option<Field> = None;
+    let mut views = Vec::new();
+    let mut stock: Option<crate::sim::HeightMap> = None;
+    let (mut before, mut base) = (0usize, 0.0);
+    let mut end = None;
+    for (tp, name, gcode) in programs {
+        let mut model = crate::sim::heights::mesh_model_after(job, &tp.tool, stock.as_ref(), &sim)?;
+        model.track_exact = false;
+        if field.is_none() {
+            field = Some(field_of(&model, job.floor).0);
+        }
+        let (mut rp, got) = replay_reading(&mut model, tp, &marks, before, base);
+        // (the sequence's models keep no cuts for the exact engagement: the chart reads the
+        // circumference pixels, paper 1 eq. 4)
+        for s in &mut rp.samples {
+            s.tea = s.tea_pixel;
+        }
+        removal.extend(got);
+        let rest = crate::sim::heights::mesh_rest(job, &model, 64).0;
+        let mut rep = Report {
+            tool_diameter_mm: tp.tool.diameter,
+            strategy: "z-level roughing".into(),
+            levels: levels_of(tp).0,
+            ..Report::default()
+        };
+        rep.engagement_ref_deg = 0.0;
+        rep.sim_res_mm = model.grid.res;
+        crate::report::fill(&mut rep, tp, &rp, &rest, job.cutting.rapid_rate);
+        let mut v = ProgramView::of(name.clone(), tp, gcode, Some(&rp), &rep);
+        v.figures.retain(|(k, _)| k != "strategy" && k != "efficiency");
+        views.push(v);
+        before += tp.moves.len();
+        base += rp.removed_volume;
+        if let Some(f) = &field {
+            end = Some(end_of(&model, f));
+        }
+        stock = Some(crate::sim::HeightMap { grid: model.grid, stock: model.heights().to_vec(), part: None });
+    }
+    Ok(Scene {
+        title: title.into(),
+        runs: vec![Run { name: "tool sequence".into(), programs: views, removal, end }],
+        field,
+        solids: vec![Solid::Mesh { kind: "part", tris: job.mesh.tris.clone() }],
+        notes: vec!["engagement by circumference pixels (paper 1 eq. 4)".into()],
+    })
+}
+
+/// The job a program is read against: a 2.5D job or a mesh job.
+#[derive(Debug, Clone, Copy)]
+pub enum Against<'a> {
+    /// A 2.5D job.
+    Flat(&'a Job),
+    /// A mesh job.
+    Mesh(&'a MeshJob),
+}
+
+/// The page of programs read from G-code (`swarf view`), each replayed on its own fresh stock
+/// of `job` by swarf's simulator, one run each: two programs for the same part side by side.
+/// `programs` are (name, program as read, its G-code).
+pub fn of_programs(
+    job: Against<'_>,
+    programs: Vec<(String, crate::io::gcode::Program, String)>,
+    sim: &SimOptions,
+) -> Result<Scene> {
+    let mut runs = Vec::new();
+    let mut field = None;
+    let mut solids = Vec::new();
+    let mut name_of_job = String::new();
+    for (name, prog, gcode) in programs {
+        let tp = &prog.toolpath;
+        let (mut model, cutting, floor) = match job {
+            Against::Flat(j) => {
+                name_of_job = j.name.clone();
+                let mut j2 = j.clone();
+                j2.cutting.tool = tp.tool.clone();
+                let sim = fitted(sim, tp.tool.diameter, j.stock.bounds());
+                let regions = j2.regions(j2.radius(), 0.0)?;
+                (RasterSim::new(&j2, &regions, &sim)?, j.cutting.clone(), j.floor)
+            }
+            Against::Mesh(j) => {
+                name_of_job = j.name.clone();
+                let sim = fitted(sim, tp.tool.diameter, Some((j.stock_lo.truncate(), j.stock_hi.truncate())));
+                (crate::sim::heights::mesh_model_after(j, &tp.tool, None, &sim)?, j.cutting.clone(), j.floor)
+            }
+        };
+        let (f, _) = field_of(&model, floor);
+        let marks = removal_marks(tp.moves.len());
+        let (mut rp, removal) = replay_reading(&mut model, tp, &marks, 0, 0.0);
+        let rest = match job {
+            Against::Flat(_) => {
+                rp.rest_cells = model.rest_cells();
+                model.rest()
+            }
+            Against::Mesh(j) => crate::sim::heights::mesh_rest(j, &model, 64).0,
+        };
+        let mut rep = Report {
+            input: name.clone(),
+            strategy: "read from G-code".into(),
+            tool_diameter_mm: tp.tool.diameter,
+            engagement_ref_deg: cutting.width.engagement_deg(),
+            levels: levels_of(tp).0,
+            sim_res_mm: model.grid.res,
+            ..Report::default()
+        };
+        crate::report::fill(&mut rep, tp, &rp, &rest, cutting.rapid_rate);
+        let mut v = ProgramView::of(name.clone(), tp, &gcode, Some(&rp), &rep);
+        v.lines = prog.lines.clone();
+        v.figures.retain(|(k, _)| k != "strategy" && k != "efficiency");
+        v.figures.insert(0, ("units read".into(), prog.units.to_string()));
+        let end = end_of(&model, &f);
+        if field.is_none() {
+            field = Some(f);
+        }
+        runs.push(Run { name, programs: vec![v], removal, end: Some(end) });
+    }
+    match job {
+        Against::Flat(j) if !j.fixtures.polys.is_empty() => solids.push(Solid::Extrusion {
+            kind: "fixture",
+            area: j.fixtures.clone(),
+            z0: j.floor,
+            z1: j.stock_top.max(j.part_top) + 0.25 * (j.stock_top - j.floor).abs().max(1.0),
+        }),
+        Against::Mesh(j) => solids.push(Solid::Mesh { kind: "part", tris: j.mesh.tris.clone() }),
+        _ => {}
+    }
+    let names: Vec<&str> = runs.iter().map(|r| r.name.as_str()).collect();
+    Ok(Scene { title: format!("{} — {}", name_of_job, names.join(" vs ")), runs, field, solids, notes: Vec::new() })
+}
+
+/// The page of a 5-axis program (`swarf five`): the tool tip's path with the tool axis at each
+/// move, over the floor and the walls drawn as surfaces. swarf has no 5-axis material model, so
+/// the page has no stock field and no engagement chart.
+pub fn of_five(job: &crate::model::five::FiveJob, prog: &crate::job::five::FiveProgram) -> Scene {
+    use crate::model::five::{Boundary, Side};
+    let moves = &prog.plan.moves;
+    let tool = crate::model::Tool { diameter: job.tool.diameter, number: 1, flutes: 2 };
+    let start = moves.first().map_or(DVec3::ZERO, |m| m.tip);
+    let mut tp = Toolpath::new(tool, start, start.z);
+    for m in moves.iter().skip(1) {
+        if m.rapid {
+            tp.rapid(m.tip);
+        } else {
+            tp.line(MoveKind::Cut, m.tip, m.feed);
+        }
+    }
+    let axes: Vec<DVec3> = moves.iter().skip(1).map(|m| m.axis).collect();
+    let figures = vec![
+        ("tool".to_string(), format!("{:?} Ø{} mm", job.tool.kind, job.tool.diameter)),
+        ("machining time".to_string(), format!("{:.2} min", prog.time_min)),
+        ("cutting length".to_string(), format!("{:.2} m", prog.length.0 / 1000.0)),
+        ("rapid length".to_string(), format!("{:.2} m", prog.length.1 / 1000.0)),
+        ("moves".to_string(), tp.moves.len().to_string()),
+        ("rounded shapes".to_string(), prog.plan.shapes.to_string()),
+        ("closest to a wall".to_string(), format!("{:.3} mm", prog.plan.wall_clearance)),
+    ];
+    let program = ProgramView {
+        name: job.name.clone(),
+        lines: Vec::new(),
+        gcode: None,
+        samples: Vec::new(),
+        ref_deg: None,
+        gouges: Vec::new(),
+        plunges: Vec::new(),
+        rapid_collisions: Vec::new(),
+        rest: Vec::new(),
+        figures,
+        axes: Some(axes),
+        toolpath: tp,
+    };
+    // the floor, and each wall as the ruled surface from the floor's edge to the top's (or the
+    // case's own), as triangles
+    const N: usize = 48;
+    let grid = |f: &dyn Fn(f64, f64) -> DVec3| {
+        let mut tris = Vec::with_capacity(2 * N * N);
+        let at = |i: usize, j: usize| f(i as f64 / N as f64, j as f64 / N as f64);
+        for j in 0..N {
+            for i in 0..N {
+                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                tris.push([a, b, c]);
+                tris.push([a, c, d]);
+            }
+        }
+        tris
+    };
+    let on = |srf: &crate::geom::nurbs::NurbsSurface, u: f64, v: f64| {
+        let ((u0, u1), (v0, v1)) = srf.domain();
+        srf.eval(u0 + (u1 - u0) * u, v0 + (v1 - v0) * v).p
+    };
+    let mut solids = vec![Solid::Mesh { kind: "part", tris: grid(&|u, v| on(&job.floor, u, v)) }];
+    for side in Side::ALL {
+        match job.boundary(side) {
+            Boundary::Open => {}
+            Boundary::Wall(Some(w)) => solids.push(Solid::Mesh { kind: "part", tris: grid(&|s, t| on(w, s, t)) }),
+            Boundary::Wall(None) => solids.push(Solid::Mesh {
+                kind: "part",
+                tris: grid(&|s, t| {
+                    let q = side.at(s);
+                    on(&job.floor, q.x, q.y).lerp(on(&job.top, q.x, q.y), t)
+                }),
+            }),
+        }
+    }
+    Scene {
+        title: format!("{} — 5-axis pocket", job.name),
+        runs: vec![Run { name: job.name.clone(), programs: vec![program], removal: Vec::new(), end: None }],
+        field: None,
+        solids,
+        notes: vec!["5-axis: the tool axis drawn; no material model, so no stock or engagement".into()],
+    }
+}
+
+/// `sim` with the cell the proof of `report` used (none when it was not proven).
+fn proof_cells(sim: &SimOptions, report: &Report) -> Option<SimOptions> {
+    (report.simulated && report.sim_res_mm > 0.0).then(|| SimOptions { res: Some(report.sim_res_mm), ..sim.clone() })
+}
+
+/// `sim` with its cell fitted to a stock spanning `span`, as the proof fits it.
+fn fitted(sim: &SimOptions, d: f64, span: Option<(DVec2, DVec2)>) -> SimOptions {
+    span.and_then(|(lo, hi)| sim.fitted(d, lo, hi)).unwrap_or_else(|| sim.clone())
+}
+
+/// The levels of a program — the heights of its horizontal cuts, highest first — and the level
+/// of each move: a horizontal cut's own, any other move's the next cut's (the last cut's after
+/// the last one). Heights within a micrometre are one level; more than 500 levels are merged
+/// to the nearest 0.1 mm.
+pub fn levels_of(tp: &Toolpath) -> (Vec<f64>, Vec<u16>) {
+    let flat: Vec<Option<f64>> = tp
+        .segments()
+        .map(|(a, m)| {
+            let cutting = matches!(m.kind, MoveKind::Cut | MoveKind::Finish);
+            (cutting && (m.to.z - a.z).abs() < 1e-6).then_some(m.to.z)
+        })
+        .collect();
+    let mut step = 1e-3;
+    let mut keys: Vec<i64>;
+    loop {
+        keys = flat.iter().flatten().map(|z| (z / step).round() as i64).collect();
+        keys.sort_unstable();
+        keys.dedup();
+        if keys.len() <= 500 || step >= 0.1 {
+            break;
+        }
+        step = 0.1;
+    }
+    keys.reverse();
+    let levels: Vec<f64> = keys.iter().map(|&k| k as f64 * step).collect();
+    let index = |z: f64| {
+        let k = (z / step).round() as i64;
+        keys.iter().position(|&x| x == k).unwrap_or(0) as u16
+    };
+    let mut of = vec![0u16; flat.len()];
+    let mut next: Option<u16> = None;
+    for i in (0..flat.len()).rev() {
+        if let Some(z) = flat[i] {
+            next = Some(index(z));
+        }
+        of[i] = next.unwrap_or(u16::MAX);
+    }
+    // after the last cut: the last cut's level
+    let last = of.iter().rev().find(|&&l| l != u16::MAX).copied().unwrap_or(0);
+    for l in &mut of {
+        if *l == u16::MAX {
+            *l = last;
+        }
+    }
+    (levels, of)
+}
+
+/// Move kinds as the page numbers them.
+fn kind_code(k: MoveKind) -> u8 {
+    match k {
+        MoveKind::Rapid => 0,
+        MoveKind::Cut => 1,
+        MoveKind::Entry => 2,
+        MoveKind::Plunge => 3,
+        MoveKind::Link => 4,
+        MoveKind::Descend => 5,
+        MoveKind::Finish => 6,
+    }
+}
+
+/// Flag bits of a packed move beside its kind.
+const ARC: u8 = 0x10;
+const CCW: u8 = 0x20;
+
+impl Scene {
+    /// The page: one HTML document with everything inlined.
+    pub fn html(&self) -> String {
+        let (head, pack) = self.packed();
+        let head = serde_json::to_string(&head).unwrap_or_else(|_| "{}".into()).replace("</", "<\\/");
+        let mut html = String::with_capacity(pack.len() / 2 + VIEWER_JS.len() + THREE_JS.len() + 4096);
+        html.push_str("<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n");
+        html.push_str("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
+        html.push_str(&format!("<title>swarf — {}</title>\n", escape(&self.title)));
+        html.push_str("<meta name=\"generator\" content=\"swarf ");
+        html.push_str(env!("CARGO_PKG_VERSION"));
+        html.push_str("\">\n<style>\n");
+        html.push_str(VIEWER_CSS);
+        html.push_str("</style></head>\n<body>\n");
+        html.push_str(VIEWER_BODY);
+        html.push_str("\n<script type=\"application/json\" id=\"swarf-head\">");
+        html.push_str(&head);
+        html.push_str("</script>\n<script type=\"application/octet-stream\" id=\"swarf-data\">");
+        html.push_str(&pack.encoded());
+        html.push_str("</script>\n<script>\n");
+        html.push_str(THREE_JS);
+        html.push_str("\n</script>\n<script>\n");
+        html.push_str(VIEWER_JS);
+        html.push_str("\n</script>\n</body></html>\n");
+        html
+    }
+
+    /// The page's head (JSON) and its arrays.
+    fn packed(&self) -> (serde_json::Value, Pack) {
+        let mut pk = Pack::default();
+        let mut runs = Vec::new();
+        for (ri, run) in self.runs.iter().enumerate() {
+            let mut progs = Vec::new();
+            for (pi, p) in run.programs.iter().enumerate() {
+                let key = format!("r{ri}p{pi}");
+                progs.push(pack_program(&mut pk, &key, p));
+            }
+            if let Some(end) = &run.end {
+                pk.f32(format!("r{ri}.end"), end.iter().copied());
+            }
+            runs.push(serde_json::json!({
+                "name": run.name,
+                "programs": progs,
+                "removal": run.removal.iter().map(|(k, v)| serde_json::json!([k, (v * 1000.0).round() / 1000.0])).collect::<Vec<_>>(),
+                "end": run.end.is_some(),
+            }));
+        }
+        let field = self.field.as_ref().map(|f| {
+            pk.f32("field.start", f.start.iter().copied());
+            pk.f32("field.part", f.part.iter().copied());
+            serde_json::json!({"x0": f.x0, "y0": f.y0, "res": f.res, "nx": f.nx, "ny": f.ny, "bottom": f.bottom})
+        });
+        let mut solids = Vec::new();
+        for (si, s) in self.solids.iter().enumerate() {
+            match s {
+                Solid::Extrusion { kind, area, z0, z1 } => {
+                    let mut xy = Vec::new();
+                    let mut polys = Vec::new();
+                    for poly in &area.polys {
+                        let mut rings = Vec::new();
+                        for ring in poly.rings() {
+                            rings.push(serde_json::json!([xy.len() / 2, ring.len()]));
+                            for p in ring {
+                                xy.push(p.x as f32);
+                                xy.push(p.y as f32);
+                            }
+                        }
+                        polys.push(rings);
+                    }
+                    pk.f32(format!("s{si}.xy"), xy);
+                    solids.push(
+                        serde_json::json!({"type": "extrusion", "kind": kind, "polys": polys, "z0": z0, "z1": z1}),
+                    );
+                }
+                Solid::Mesh { kind, tris } => {
+                    pk.f32(
+                        format!("s{si}.tris"),
+                        tris.iter().flat_map(|t| t.iter().flat_map(|p| [p.x as f32, p.y as f32, p.z as f32])),
+                    );
+                    solids.push(serde_json::json!({"type": "mesh", "kind": kind, "count": tris.len()}));
+                }
+            }
+        }
+        let head = serde_json::json!({
+            "format": 1,
+            "swarf": env!("CARGO_PKG_VERSION"),
+            "title": self.title,
+            "notes": self.notes,
+            "runs": runs,
+            "field": field,
+            "solids": solids,
+            "arrays": pk.table(),
+            "chartBuckets": CHART_BUCKETS,
+        });
+        (head, pk)
+    }
+}
+
+/// Packs one program's arrays under `key` and returns its entry of the head.
+fn pack_program(pk: &mut Pack, key: &str, p: &ProgramView) -> serde_json::Value {
+    let tp = &p.toolpath;
+    let n = tp.moves.len();
+    pk.f32(format!("{key}.to"), tp.moves.iter().flat_map(|m| [m.to.x as f32, m.to.y as f32, m.to.z as f32]));
+    pk.f32(
+        format!("{key}.ctr"),
+        tp.moves.iter().flat_map(|m| match m.motion {
+            Motion::Arc { center, .. } => [center.x as f32, center.y as f32],
+            Motion::Line => [f32::NAN, f32::NAN],
+        }),
+    );
+    let flags: Vec<u8> = tp
+        .moves
+        .iter()
+        .map(|m| {
+            kind_code(m.kind)
+                | match m.motion {
+                    Motion::Arc { ccw, .. } => ARC | if ccw { CCW } else { 0 },
+                    Motion::Line => 0,
+                }
+        })
+        .collect();
+    pk.u8(format!("{key}.flags"), &flags);
+    pk.f32(format!("{key}.feed"), tp.moves.iter().map(|m| m.feed as f32));
+    let (levels, of) = levels_of(tp);
+    pk.u16(format!("{key}.level"), of);
+    if p.lines.len() == n {
+        pk.u32(format!("{key}.line"), p.lines.iter().copied());
+    }
+    // cutting length at the end of each move, as the replay counts it (feed moves, in 3D)
+    let mut s = 0.0;
+    pk.f32(
+        format!("{key}.s"),
+        tp.segments()
+            .map(|(a, m)| {
+                if !m.is_rapid() {
+                    s += move_length(a, m);
+                }
+                s as f32
+            })
+            .collect::<Vec<_>>(),
+    );
+    // the largest engagement on each move (lateral and descending samples; plunges are marked)
+    let mut tea = vec![f32::NAN; n];
+    for sm in &p.samples {
+        if let Some(t) = tea.get_mut(sm.mi as usize)
+            && sm.kind != SampleKind::Plunge
+        {
+            *t = if t.is_nan() { sm.tea } else { t.max(sm.tea) };
+        }
+    }
+    pk.f32(format!("{key}.tea"), tea);
+    // the chart: samples in buckets of equal length, the largest of each and where it was
+    let total = p.samples.last().map_or(0.0, |s| s.s);
+    let nb = CHART_BUCKETS.min(p.samples.len());
+    if nb > 0 {
+        let width = (total / nb as f64).max(1e-9);
+        let mut b_s = vec![f32::NAN; nb];
+        let mut b_max = vec![f32::NAN; nb];
+        let mut b_mean = vec![0f32; nb];
+        let mut b_n = vec![0u32; nb];
+        let mut b_mi = vec![0u32; nb];
+        for sm in &p.samples {
+            if sm.kind == SampleKind::Plunge {
+                continue;
+            }
+            let b = ((sm.s / width) as usize).min(nb - 1);
+            if b_max[b].is_nan() || sm.tea > b_max[b] {
+                b_max[b] = sm.tea;
+                b_s[b] = sm.s as f32;
+                b_mi[b] = sm.mi;
+            }
+            b_mean[b] += sm.tea;
+            b_n[b] += 1;
+        }
+        let keep: Vec<usize> = (0..nb).filter(|&b| b_n[b] > 0).collect();
+        pk.f32(format!("{key}.cs"), keep.iter().map(|&b| b_s[b]));
+        pk.f32(format!("{key}.cmax"), keep.iter().map(|&b| b_max[b]));
+        pk.f32(format!("{key}.cmean"), keep.iter().map(|&b| b_mean[b] / b_n[b] as f32));
+        pk.u32(format!("{key}.cmi"), keep.iter().map(|&b| b_mi[b]));
+    }
+    if !p.rest.is_empty() {
+        pk.f32(format!("{key}.rest"), p.rest.iter().flat_map(|c| [c.x as f32, c.y as f32]));
+    }
+    if let Some(ax) = &p.axes {
+        pk.f32(format!("{key}.axis"), ax.iter().flat_map(|a| [a.x as f32, a.y as f32, a.z as f32]));
+    }
+    if let Some(g) = &p.gcode {
+        pk.u8(format!("{key}.gcode"), g.as_bytes());
+    }
+    let ev = |v: &[Event]| {
+        v.iter().map(|e| serde_json::json!([e.move_index, e.at[0], e.at[1], e.at[2], e.depth])).collect::<Vec<_>>()
+    };
+    serde_json::json!({
+        "key": key,
+        "name": p.name,
+        "tool": {"d": tp.tool.diameter, "number": tp.tool.number},
+        "start": [tp.start.x, tp.start.y, tp.start.z],
+        "clearance": tp.clearance_z,
+        "moves": n,
+        "levels": levels,
+        "ref": p.ref_deg,
+        "figures": p.figures,
+        "gouges": ev(&p.gouges),
+        "plunges": ev(&p.plunges),
+        "rapidCollisions": ev(&p.rapid_collisions),
+        "cutLength": s,
+    })
+}
+
+/// `s` with `&`, `<` and `>` escaped for HTML text.
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+}
+
+/// three.js with its orbit controls, one classic script (see `viewer/build.sh`).
+const THREE_JS: &str = include_str!("three.bundle.js");
+/// The viewer's script.
+const VIEWER_JS: &str = include_str!("viewer.js");
+/// Its style sheet.
+const VIEWER_CSS: &str = include_str!("viewer.css");
+/// Its page body.
+const VIEWER_BODY: &str = include_str!("viewer.html");
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::Tool;
+
+    fn path() -> Toolpath {
+        let mut tp = Toolpath::new(Tool::flat(6.0), DVec3::new(0.0, 0.0, 5.0), 5.0);
+        tp.rapid(DVec3::new(0.0, 0.0, 1.0));
+        tp.line(MoveKind::Plunge, DVec3::new(0.0, 0.0, -1.0), 100.0);
+        tp.line(MoveKind::Cut, DVec3::new(10.0, 0.0, -1.0), 500.0);
+        tp.line(MoveKind::Descend, DVec3::new(10.0, 0.0, -2.0), 100.0);
+        tp.arc(MoveKind::Cut, DVec3::new(10.0, 10.0, -2.0), DVec2::new(10.0, 5.0), true, 500.0);
+        tp.rapid(DVec3::new(10.0, 10.0, 5.0));
+        tp
+    }
+
+    #[test]
+    fn levels_are_the_heights_of_the_flat_cuts_and_every_move_takes_the_next_cuts() {
+        let (levels, of) = levels_of(&path());
+        assert_eq!(levels, vec![-1.0, -2.0]);
+        assert_eq!(of, vec![0, 0, 0, 1, 1, 1]);
+    }
+
+    #[test]
+    fn the_removal_marks_run_from_none_to_all_and_hold_the_middle() {
+        let m = removal_marks(1000);
+        assert_eq!((m[0], *m.last().unwrap(), m.len()), (0, 1000, REMOVAL_STEPS + 1));
+        assert!(m.contains(&500));
+        assert_eq!(removal_marks(3), vec![0, 1, 2, 3]);
+    }
+
+    #[test]
+    fn the_page_is_one_file_with_its_data_and_no_script_end_inside_them() {
+        let p = ProgramView {
+            name: "a</script>".into(),
+            toolpath: path(),
+            lines: vec![],
+            gcode: Some("G0 X0 (</script>)\n".into()),
+            samples: vec![],
+            ref_deg: Some(60.0),
+            gouges: vec![],
+            plunges: vec![],
+            rapid_collisions: vec![],
+            rest: vec![],
+            figures: vec![("t".into(), "</script>".into())],
+            axes: None,
+        };
+        let scene = Scene {
+            title: "t".into(),
+            runs: vec![Run { name: "r".into(), programs: vec![p], removal: vec![(0, 0.0), (6, 1.0)], end: None }],
+            field: None,
+            solids: vec![],
+            notes: vec![],
+        };
+        let html = scene.html();
+        // the three.js bundle, the viewer's script and the head; only our own script ends
+        assert_eq!(html.matches("</script>").count(), 4);
+        assert!(!html.contains("src=\"http") && !html.contains("src='http"));
+        let (head, _) = scene.packed();
+        assert_eq!(head["runs"][0]["programs"][0]["moves"], 6);
+        assert_eq!(head["arrays"]["r0p0.flags"][2], 6);
+        assert_eq!(head["runs"][0]["programs"][0]["levels"], serde_json::json!([-1.0, -2.0]));
+    }
+}
