@@ -52,6 +52,9 @@ enum Cmd {
     /// paper 2 §2): write the C¹ toolpath as an APT CL file and, with --gcode, as LinuxCNC
     /// G-code for the case's table-tilting A/C machine.
     Five(FiveArgs),
+    /// Look at programs (G-code from swarf or any other system) on a job: replay each on swarf's
+    /// simulator and write one interactive 3D page (HTML) showing them side by side.
+    View(ViewArgs),
     /// Run the built-in example (a pocket with two islands) and write everything into a folder.
     Demo {
         /// Output folder.
@@ -272,8 +275,38 @@ struct RoughArgs {
     /// engagement, kind, entry bore, move index).
     #[arg(long, value_name = "OUT.csv")]
     samples: Option<PathBuf>,
+    /// Interactive 3D view of the program: one self-contained HTML page to open in a browser
+    /// (playback over the stock, the engagement chart, filters by level).
+    #[arg(long, value_name = "OUT.html")]
+    html: Option<PathBuf>,
     #[command(flatten)]
     opts: CommonOpts,
+}
+
+#[derive(Args)]
+struct ViewArgs {
+    /// The programs (G-code: LinuxCNC, GRBL or FreeCAD's posts); each is replayed on a fresh
+    /// stock of the job, and the page shows them side by side.
+    #[arg(required = true, value_name = "PROGRAM.ngc")]
+    programs: Vec<PathBuf>,
+    /// The job the programs cut: a case (.json, 2.5D or 3D), an STL part, a DXF or an SVG
+    /// drawing.
+    #[arg(long, value_name = "CASE")]
+    case: PathBuf,
+    /// The page (HTML).
+    #[arg(short, long, value_name = "OUT.html", default_value = "view.html")]
+    output: PathBuf,
+    /// The tool's diameter, mm (default: the job's).
+    #[arg(long, value_name = "MM")]
+    tool_diameter: Option<f64>,
+    /// Simulation cell size, mm (default: a hundredth of the tool, 0.02 to 0.1 mm).
+    #[arg(long, value_name = "MM")]
+    res: Option<f64>,
+    #[command(flatten)]
+    place: PlacementOpts,
+    /// Print nothing.
+    #[arg(long, short)]
+    quiet: bool,
 }
 
 #[derive(Copy, Clone, PartialEq, Eq, ValueEnum)]
@@ -322,6 +355,10 @@ struct PlanArgs {
     /// Rows of the table printed (the cheapest sequences).
     #[arg(long, value_name = "N", default_value_t = 15)]
     rows: usize,
+    /// Interactive 3D view of the programs, a tool per colour, each replayed on what the ones
+    /// before it left: one self-contained HTML page.
+    #[arg(long, value_name = "OUT.html")]
+    html: Option<PathBuf>,
     #[command(flatten)]
     place: PlacementOpts,
     /// Print nothing.
@@ -365,6 +402,10 @@ struct FiveArgs {
     /// the orientation field (.svg, or .png).
     #[arg(long)]
     picture: Option<PathBuf>,
+    /// Interactive 3D view of the path with the tool axis, over the floor and the walls: one
+    /// self-contained HTML page.
+    #[arg(long, value_name = "OUT.html")]
+    html: Option<PathBuf>,
     /// Print nothing.
     #[arg(long, short)]
     quiet: bool,
@@ -595,6 +636,7 @@ fn main() -> ExitCode {
         Cmd::Plan(a) => plan(a),
         Cmd::Five(a) => five(a),
         Cmd::Shape(a) => shape(a),
+        Cmd::View(a) => view(a),
         Cmd::Demo { out_dir, opts } => demo(&out_dir, &opts),
     };
     match res {
@@ -796,13 +838,14 @@ struct Outputs {
     samples: Option<PathBuf>,
     plot_svg: Option<PathBuf>,
     plot_png: Option<PathBuf>,
+    html: Option<PathBuf>,
     /// The files the run read: no output may replace one.
     inputs: Vec<PathBuf>,
 }
 
 impl Outputs {
     fn paths(&self) -> Vec<&Path> {
-        let opt = [&self.report, &self.samples, &self.plot_svg, &self.plot_png];
+        let opt = [&self.report, &self.samples, &self.plot_svg, &self.plot_png, &self.html];
         std::iter::once(self.gcode.as_path()).chain(opt.into_iter().flatten().map(PathBuf::as_path)).collect()
     }
 
@@ -832,8 +875,10 @@ impl Scene {
 }
 
 /// `scene` is drawn under the path, and only asked for when there is a picture to draw.
+/// `page` is the program's viewer, only asked for when there is a page to write.
 fn write_outputs(
     scene: impl FnOnce() -> Scene,
+    page: impl FnOnce() -> swarf::Result<swarf::view::Scene>,
     res: &RoughResult,
     out: &Outputs,
     extra: Vec<OutputFile>,
@@ -909,6 +954,9 @@ fn write_outputs(
             files.push(OutputFile::new(p, svg));
         }
     }
+    if let Some(p) = &out.html {
+        files.push(OutputFile::new(p, page()?.html()));
+    }
     files.extend(extra);
     output::commit(&files, &out.inputs())?;
     Ok(())
@@ -973,6 +1021,7 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
         samples: a.samples.clone(),
         plot_svg,
         plot_png,
+        html: a.html.clone(),
         inputs: reading.files.clone(),
     };
     // (refused before the work, not after it)
@@ -996,7 +1045,11 @@ fn rough(a: RoughArgs) -> Result<(), Failure> {
         Input::Flat(job) => Scene::of(job),
         Input::Mesh(job) => Scene::of_mesh(job, &res.report.levels),
     };
-    write_outputs(scene, &res, &out, Vec::new())?;
+    let page = || match &input {
+        Input::Flat(job) => swarf::view::of_rough(job, &res, &opts.sim),
+        Input::Mesh(job) => swarf::view::of_mesh_rough(job, &res, &opts.sim),
+    };
+    write_outputs(scene, page, &res, &out, Vec::new())?;
     if !a.opts.quiet {
         eprintln!("{}", summary(&res.report));
     }
@@ -1017,6 +1070,7 @@ fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
         samples: None,
         plot_svg: Some(dir.join("demo.svg")),
         plot_png: Some(dir.join("demo.png")),
+        html: Some(dir.join("demo.html")),
         inputs: Vec::new(),
     };
     let case =
@@ -1024,11 +1078,11 @@ fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
     // (refused before the work, as rough's)
     output::check(&[out.paths(), vec![case.path.as_path()]].concat(), &[])?;
     let res = run(&job, &opts, o.quiet)?;
-    write_outputs(|| Scene::of(&job), &res, &out, vec![case])?;
+    write_outputs(|| Scene::of(&job), || swarf::view::of_rough(&job, &res, &opts.sim), &res, &out, vec![case])?;
     if !o.quiet {
         eprintln!("{}", summary(&res.report));
         eprintln!(
-            "wrote {}/demo.ngc, demo.report.json, demo.svg, demo.png and the case demo_pocket.json",
+            "wrote {}/demo.ngc, demo.report.json, demo.svg, demo.png, the 3D view demo.html and the case demo_pocket.json",
             dir.display()
         );
     }
@@ -1070,6 +1124,7 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
     let input_name = a.input.file_name().and_then(|s| s.to_str()).unwrap_or("input").to_string();
     let mut files: Vec<OutputFile> = Vec::new();
     let mut programs = Vec::new();
+    let mut posted: Vec<(swarf::Toolpath, String, String)> = Vec::new();
     for (i, p) in sp.programs.iter().enumerate() {
         let stem = format!("{:02}_{}_D{}", i + 1, file_safe(&p.spec.id), swarf::post::num(p.spec.diameter, 3));
         let mut tp = p.toolpath.clone();
@@ -1106,6 +1161,9 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
         };
         let gcode = swarf::post::write(&tp, post, &header)?;
         let name = format!("{stem}.ngc");
+        if a.html.is_some() {
+            posted.push((tp.clone(), name.clone(), gcode.clone()));
+        }
         files.push(OutputFile::new(a.output_dir.join(&name), gcode));
         let mut entry = serde_json::json!({
             "file": name,
@@ -1166,6 +1224,14 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
     });
     let json = serde_json::to_string_pretty(&report).map_err(|e| Failure { user: false, msg: e.to_string() })?;
     files.push(OutputFile::new(&report_path, json + "\n"));
+    if let Some(html) = &a.html {
+        let progs: Vec<(&swarf::Toolpath, String, String)> =
+            posted.iter().map(|(tp, name, gcode)| (tp, name.clone(), gcode.clone())).collect();
+        let title = format!("{input_name} — tool sequence {}", best.tools.join(", "));
+        let scene =
+            swarf::view::of_plan(&job, &progs, &swarf::SimOptions::DEFAULT, title).map_err(|e| e.in_file(&a.input))?;
+        files.push(OutputFile::new(html, scene.html()));
+    }
     // (all refused before the folder is made: a refused run leaves nothing)
     output::check(&files.iter().map(|f| f.path.as_path()).collect::<Vec<_>>(), &inputs)?;
     std::fs::create_dir_all(&a.output_dir)
@@ -1204,6 +1270,61 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
             a.output_dir.display(),
             report_path.display()
         );
+    }
+    Ok(())
+}
+
+/// `swarf view`: programs read from G-code, replayed on the job, one page.
+fn view(a: ViewArgs) -> Result<(), Failure> {
+    let ov = Overrides { tool_diameter: a.tool_diameter, ..placement(&a.place)? };
+    let (input, reading) = swarf::io::read_input(&a.case, &ov)?;
+    let mut inputs: Vec<&Path> = reading.files.iter().map(PathBuf::as_path).collect();
+    inputs.extend(a.programs.iter().map(PathBuf::as_path));
+    output::check(&[&a.output], &inputs)?;
+    let sim = swarf::SimOptions { res: a.res, ..swarf::SimOptions::DEFAULT };
+    sim.validate()?;
+    let tool = match &input {
+        Input::Flat(j) => j.cutting.tool.clone(),
+        Input::Mesh(j) => j.cutting.tool.clone(),
+    };
+    let mut programs = Vec::new();
+    for path in &a.programs {
+        let text = std::fs::read(path).map_err(|e| swarf::Error::input(path, "file", e.to_string()))?;
+        let text = String::from_utf8(text).map_err(|e| {
+            swarf::Error::input(path, format!("byte {}", e.utf8_error().valid_up_to()), "not UTF-8 text")
+        })?;
+        let opts = swarf::io::gcode::ReadOptions { tool: tool.clone(), clearance_z: None };
+        let prog = swarf::io::gcode::read(&text, path, &opts)?;
+        if !a.quiet {
+            for w in &prog.warnings {
+                eprintln!("swarf: warning: {}: {w}", path.display());
+            }
+        }
+        let name = path.file_name().and_then(|s| s.to_str()).unwrap_or("program").to_string();
+        programs.push((name, prog, text));
+    }
+    let against = match &input {
+        Input::Flat(j) => swarf::view::Against::Flat(j),
+        Input::Mesh(j) => swarf::view::Against::Mesh(j),
+    };
+    let scene = swarf::view::of_programs(against, programs, &sim).map_err(|e| e.in_file(&a.case))?;
+    output::commit(&[OutputFile::new(&a.output, scene.html())], &inputs)?;
+    if !a.quiet {
+        for r in &scene.runs {
+            for p in &r.programs {
+                let f = |k: &str| p.figures.iter().find(|(l, _)| l == k).map_or("-", |(_, v)| v.as_str());
+                eprintln!(
+                    "{}: {} moves, {}, engagement max / p95 / mean {}, gouges {}, rest {}",
+                    p.name,
+                    p.toolpath.moves.len(),
+                    f("machining time"),
+                    f("engagement max / p95 / mean"),
+                    f("gouges"),
+                    f("rest")
+                );
+            }
+        }
+        eprintln!("wrote {}", a.output.display());
     }
     Ok(())
 }
@@ -1268,6 +1389,9 @@ fn five(a: FiveArgs) -> Result<(), Failure> {
     if let Some(p) = &a.picture {
         outs.push(p);
     }
+    if let Some(p) = &a.html {
+        outs.push(p);
+    }
     output::check(&outs, &[&a.input])?;
     let job = swarf::io::five::read_five(&a.input)?;
     let opts = FiveOptions { back: a.back, ..FiveOptions::default() };
@@ -1288,6 +1412,9 @@ fn five(a: FiveArgs) -> Result<(), Failure> {
             text.into_bytes()
         };
         files.push(OutputFile::new(path, bytes));
+    }
+    if let Some(path) = &a.html {
+        files.push(OutputFile::new(path, swarf::view::of_five(&job, &p).html()));
     }
     output::commit(&files, &[&a.input])?;
     if !a.quiet {

@@ -4,9 +4,11 @@
 
 mod common;
 
+mod browser;
 mod cli_errors;
 mod e2e_rs274;
 mod five_cli;
 mod hostile;
 mod plan_report;
 mod programs_golden;
+mod view_cli;

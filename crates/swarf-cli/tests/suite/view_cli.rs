@@ -1,0 +1,113 @@
+//! The viewer from the command line: `swarf rough --html`, `swarf view` on another system's
+//! program, their errors. (What the pages do in a browser is tested in `browser.rs`.)
+
+use crate::common::{TempDir, swarf};
+use std::path::{Path, PathBuf};
+
+fn repo(p: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(p)
+}
+
+/// The head (JSON) of a page swarf wrote.
+fn head(html: &str) -> serde_json::Value {
+    let start = html.find("id=\"swarf-head\">").expect("the page's head") + "id=\"swarf-head\">".len();
+    let end = start + html[start..].find("</script>").expect("its end");
+    serde_json::from_str(&html[start..end].replace("<\\/", "</")).expect("JSON")
+}
+
+fn figure<'a>(program: &'a serde_json::Value, label: &str) -> &'a str {
+    program["figures"]
+        .as_array()
+        .expect("figures")
+        .iter()
+        .find(|f| f[0] == label)
+        .and_then(|f| f[1].as_str())
+        .unwrap_or_else(|| panic!("no figure {label:?} in {}", program["figures"]))
+}
+
+#[test]
+fn rough_writes_one_self_contained_page_the_same_each_time() {
+    let dir = TempDir::new("view-rough");
+    let case = repo("examples/cases/round_pocket.json");
+    let case = case.to_str().unwrap();
+    for name in ["a", "b"] {
+        let run = swarf(
+            dir.path(),
+            &[
+                "rough",
+                case,
+                "-o",
+                &format!("{name}.ngc"),
+                "--report",
+                &format!("{name}.json"),
+                "--html",
+                &format!("{name}.html"),
+                "-q",
+            ],
+        );
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    }
+    let html = std::fs::read_to_string(dir.path().join("a.html")).unwrap();
+    assert_eq!(html, std::fs::read_to_string(dir.path().join("b.html")).unwrap(), "the same page twice");
+    // everything inline: no script or style from elsewhere
+    assert!(!html.contains("src=\"http") && !html.contains("<link"), "a page that reaches out");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("a.json")).unwrap()).unwrap();
+    let h = head(&html);
+    let p = &h["runs"][0]["programs"][0];
+    assert_eq!(p["moves"], report["moves"]["total"], "every move of the program");
+    assert_eq!(p["levels"].as_array().unwrap().len(), report["levels"].as_array().unwrap().len());
+    assert_eq!(figure(p, "machining time"), format!("{:.2} min", report["time_min"].as_f64().unwrap()));
+    // the simulator's removed volume, from none to all of it
+    let removal = h["runs"][0]["removal"].as_array().unwrap();
+    assert_eq!(removal[0], serde_json::json!([0, 0.0]));
+    let last = removal.last().unwrap();
+    assert_eq!(last[0], report["moves"]["total"]);
+    let all = report["removed_volume_mm3"].as_f64().unwrap();
+    assert!((last[1].as_f64().unwrap() - all).abs() < 0.005 * all, "{last} against the report's {all}");
+    // the stock field and the G-code lines of the moves
+    assert!(h["field"]["nx"].as_u64().unwrap() > 10);
+    assert!(h["arrays"]["r0p0.line"].is_array() && h["arrays"]["r0p0.gcode"].is_array());
+}
+
+#[test]
+fn view_replays_freecads_program_beside_swarfs() {
+    let dir = TempDir::new("view-freecad");
+    let case = repo("examples/cases/pocket_islands.json");
+    let fc = repo("examples/programs/freecad_adaptive_pocket_islands.ngc");
+    let run = swarf(dir.path(), &["rough", case.to_str().unwrap(), "-o", "swarf.ngc", "-q"]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let run = swarf(
+        dir.path(),
+        &["view", fc.to_str().unwrap(), "swarf.ngc", "--case", case.to_str().unwrap(), "-o", "cmp.html"],
+    );
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let said = String::from_utf8_lossy(&run.stderr);
+    assert!(said.contains("freecad_adaptive_pocket_islands.ngc: 12239 moves, 8.39 min"), "{said}");
+    let h = head(&std::fs::read_to_string(dir.path().join("cmp.html")).unwrap());
+    let runs = h["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2, "a run per program");
+    let (fc, ours) = (&runs[0]["programs"][0], &runs[1]["programs"][0]);
+    // FreeCAD's machining time as an independent checker measures it; its wall gouges found
+    assert_eq!(figure(fc, "machining time"), "8.39 min");
+    assert!(!fc["gouges"].as_array().unwrap().is_empty());
+    assert!(ours["gouges"].as_array().unwrap().is_empty());
+    assert_eq!(figure(fc, "units read"), "mm");
+}
+
+#[test]
+fn view_refuses_a_bad_program_naming_the_line_and_writes_nothing() {
+    let dir = TempDir::new("view-bad");
+    let case = repo("examples/cases/round_pocket.json");
+    dir.write("bad.ngc", "G21 G90\nG0 Z5\nG0 X0 Y0\nG18 G2 X1 Z-1 I0.5 K0 F100\nM2\n");
+    let run = swarf(dir.path(), &["view", "bad.ngc", "--case", case.to_str().unwrap(), "-o", "out.html"]);
+    assert_eq!(run.status.code(), Some(2));
+    let said = String::from_utf8_lossy(&run.stderr);
+    assert!(said.contains("bad.ngc") && said.contains("line 4"), "{said}");
+    assert!(!dir.path().join("out.html").exists(), "no page written");
+    // an output that is one of the programs is refused before any work
+    dir.write("ok.ngc", "G21 G90\nG0 Z5\nG0 X0 Y0\nG1 Z-1 F100\nG1 X5 F500\nG0 Z5\nM2\n");
+    let run = swarf(dir.path(), &["view", "ok.ngc", "--case", case.to_str().unwrap(), "-o", "ok.ngc"]);
+    assert_eq!(run.status.code(), Some(2), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(std::fs::read_to_string(dir.path().join("ok.ngc")).unwrap().starts_with("G21 G90"), "the program kept");
+}
