@@ -977,8 +977,18 @@ impl RasterSim {
         let rr = self.r - self.tol;
         let mut worst = 0.0f64;
         let mut at = path.at(0.0);
+        // a cell of a 2.5D job's walls (the part and fixtures grown by the allowance, standing
+        // to the part's top) in the tool's column is left by moving the tool up by its height
+        // over the tip or sideways by the rim's overlap: the smaller is how deep the tool is in
+        // (a rim that grazes a wall is not in it by the wall's whole height); the floor and a
+        // mesh part's surface are gouged from above
+        let wall = (self.part_top_eff - 1e-6) as f32;
+        let walls = !self.keep_edges.is_empty();
         visit_above(&self.grid, &self.p, Some((&self.pmax, self.nbx)), path, rr, self.tol, |k, q, z| {
-            let d = self.p[k] as f64 - z;
+            let mut d = self.p[k] as f64 - z;
+            if walls && self.p[k] >= wall {
+                d = d.min(self.r - path.distance(q));
+            }
             if d > worst {
                 worst = d;
                 at = DVec3::new(q.x, q.y, z);
@@ -1293,6 +1303,21 @@ mod tests {
 
     fn point(p: DVec2) -> Path {
         Path::Line { a: p.extend(0.0), b: p.extend(0.0) }
+    }
+
+    #[test]
+    fn a_rim_that_grazes_a_wall_gouges_it_by_the_overlap_not_by_the_walls_height() {
+        // an island [5, 10]² standing to the top; a Ø6 cut at the floor along y = 0 from x = -8
+        // to x = 2.2: its rim reaches 0.2 mm into the island's side, 5 mm below its top
+        let s = sim_with(Area::rect(-20.0, -20.0, 20.0, 20.0), Area::rect(5.0, -2.0, 10.0, 2.0));
+        let graze = Path::Line { a: DVec3::new(-8.0, 0.0, -5.0), b: DVec3::new(2.2, 0.0, -5.0) };
+        let (d, at) = s.gouge_depth(&graze);
+        assert!((d - 0.2).abs() < 0.06, "{d} mm at {at}");
+        // clear of it: no gouge; through the floor under the tool's centre: the depth below it
+        let clear = Path::Line { a: DVec3::new(-8.0, 0.0, -5.0), b: DVec3::new(1.9, 0.0, -5.0) };
+        assert_eq!(s.gouge_depth(&clear).0, 0.0);
+        let low = Path::Line { a: DVec3::new(-8.0, 0.0, -5.3), b: DVec3::new(-4.0, 0.0, -5.3) };
+        assert!((s.gouge_depth(&low).0 - 0.3).abs() < 1e-6);
     }
 
     #[test]
