@@ -1,5 +1,7 @@
-// Opens a page, waits for the viewer, prints its state and saves a screenshot (a development aid:
-//   node tests/browser/peek.mjs PAGE.html OUT.png [move]).
+// Opens a page, waits for the viewer, prints its state and saves a screenshot (a development aid,
+// and how docs/viewer.md's figures were measured):
+//   node tests/browser/peek.mjs PAGE.html OUT.png [MOVE|mid]
+// MOVE moves the slider there first; `mid` to the simulator's reading nearest the middle.
 import { launch, openPage } from './harness.mjs';
 const [html, png, move] = process.argv.slice(2);
 const browser = await launch();
@@ -9,7 +11,7 @@ try {
   const st = await page.evaluate((move) => {
     const s = window.swarf;
     if (s.error) return { error: s.error };
-    if (move !== undefined) s.seek(+move);
+    if (move === 'mid') { const m = s.removalMarks(); s.seek(m[Math.floor(m.length / 2)]); } else if (move !== undefined) s.seek(+move);
     return { readyMs: s.readyMs, moves: s.moves(), k: s.position(), removed: s.removedVolume(), sim: s.simulatorVolume(), levels: s.levels().length, marks: s.marks };
   }, move);
   await page.waitForTimeout(300);

@@ -513,7 +513,7 @@
     if (entries.length) markRoot.add(points(entries, 0x1a9e3a, 6));
     if (plunges.length) markRoot.add(points(plunges, 0xc01890, 8));
     if (collisions.length) markRoot.add(points(collisions, 0xff6a00, 9));
-    if (gouges.length) markRoot.add(points(gouges, 0xe00000, 10));
+    if (gouges.length) markRoot.add(points(gouges, 0xe00000, 7));
     if (rest.length) restRoot.add(points(rest, 0xff8c1a, 2));
     S.marks = { entries: entries.length / 3, plunges: plunges.length / 3, gouges: gouges.length / 3, rapidCollisions: collisions.length / 3, rest: rest.length / 3 };
   }
