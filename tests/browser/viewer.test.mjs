@@ -69,7 +69,7 @@ async function common(page, name) {
   // the slider at the middle: partly cut stock, the page's removed volume as the simulator's
   const n = await page.evaluate(() => window.swarf.moves());
   const marks = await page.evaluate(() => window.swarf.removalMarks());
-  const mid = marks[Math.floor(marks.length / 2)];
+  const mid = marks.reduce((a, b) => (Math.abs(b - n / 2) < Math.abs(a - n / 2) ? b : a));
   assert.ok(Math.abs(mid - n / 2) <= 1, `${name}: the middle mark ${mid} of ${n} moves`);
   await page.locator('#slider').fill(String(mid));
   const st = await page.evaluate(() => ({
@@ -102,6 +102,15 @@ async function common(page, name) {
   const hl = await page.locator('#gcode .hl').textContent();
   assert.match(hl, new RegExp('^\\s*' + sel.line + '\\s+\\S'), `${name}: the G-code line shown`);
   await page.mouse.move(0, 0);
+  // clicking a move in the view selects it: its G-code line and its place on the chart
+  await page.evaluate(() => { window.swarf.selected = null; });
+  const target = mid - 1;
+  const xy = await page.evaluate((g) => window.swarf.screenOf(g), target);
+  await page.mouse.click(xy.x, xy.y);
+  const picked = await page.evaluate(() => window.swarf.selected);
+  assert.ok(picked && picked.move >= 0, `${name}: a click on move ${target} selected a move`);
+  assert.match(await page.locator('#moveinfo').textContent(), new RegExp(`^move ${picked.move + 1} of \\d+`));
+  assert.match(await page.locator('#gcode .hl').textContent(), new RegExp('^\\s*' + picked.line + '\\s+\\S'));
 }
 
 // the level filter: only the level left on is drawn
@@ -148,6 +157,11 @@ describe('the viewer', { concurrency: false }, () => {
     await page.locator('#tools input[data-tool="0"]').uncheck();
     const after = await page.evaluate(() => window.swarf.drawnSegments());
     assert.ok(after < before, `${after} segments drawn of ${before} without the first tool`);
+    // the stock each tool leaves: played to the end of the first tool, the simulator's reading
+    await page.locator('#tools button[data-after="0"]').click();
+    const first = await page.evaluate(() => ({ k: window.swarf.position(), page: window.swarf.removedVolume(), sim: window.swarf.simulatorVolume() }));
+    assert.ok(first.k > 0 && Math.abs(first.page - first.sim) < 0.02 * first.sim, JSON.stringify(first));
+    await page.screenshot({ path: join(out, 'plan_after_first_tool.png') });
     await page.close();
   });
 

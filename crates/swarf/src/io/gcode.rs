@@ -101,7 +101,7 @@ const MAX_EXTRA_MOVES: usize = 1_000_000;
 ///
 /// Refused, with the line and column: other planes (`G18`, `G19`), cutter compensation (`G41`,
 /// `G42`), feed per revolution and inverse time (`G95`, `G93`), offsets set by the program
-/// (`G10`, `G52`, `G92`), `G53` in X or Y, splines, threading, probing, other G-codes, axes
+/// other than work offsets (`G52`, `G92`; `G10 L2`/`L20` are read), `G53` in X or Y, splines, threading, probing, other G-codes, axes
 /// other than X Y Z, parameters, expressions and subroutines (`#`, `[`, `O`, `M98`), garbled
 /// numbers and words without one, numbers beyond [`limits::MAX_NUMBER`] and positions beyond
 /// [`limits::MAX_COORD_MM`], a feed move with no feed or `F0`, arcs LinuxCNC refuses (the
@@ -230,6 +230,11 @@ fn tokenize(chars: &[char], offset: usize, line: u32, file: &Path) -> Result<Vec
                     return err(i, format!("the word {letter} has no number (found {what})"));
                 }
                 let body = text.strip_prefix(['+', '-']).unwrap_or(&text);
+                if body.is_empty()
+                    && let Some(&n @ ('#' | '[')) = chars.get(j)
+                {
+                    return err(j, format!("'{n}': parameters and expressions are not read"));
+                }
                 if body.is_empty() {
                     return err(i, format!("the word {letter} has no number (found '{text}')"));
                 }
@@ -357,6 +362,10 @@ struct Reader<'a> {
     units_changed: bool,
     wcs: Vec<u32>,
     homes: Vec<u32>,
+    /// The work offsets of G54 to G59 that `G10 L2`/`L20` set, mm (all zero until then: the
+    /// path is in the coordinates of a G54 at zero), and which one is in use.
+    offsets: [[f64; 3]; 6],
+    current: usize,
 }
 
 impl<'a> Reader<'a> {
@@ -381,6 +390,8 @@ impl<'a> Reader<'a> {
             units: None,
             units_changed: false,
             wcs: Vec::new(),
+            offsets: [[0.0; 3]; 6],
+            current: 0,
             homes: Vec::new(),
         }
     }
@@ -484,7 +495,13 @@ impl<'a> Reader<'a> {
                 911 => self.ijk_absolute = false,
                 980 => self.retract_to_r = false,
                 990 => self.retract_to_r = true,
-                540..=593 if !self.wcs.contains(&g) => self.wcs.push(g),
+                540..=593 => {
+                    if !self.wcs.contains(&g) {
+                        self.wcs.push(g);
+                    }
+                    // (G59.1 to G59.3 have no offset the program sets: read as zero)
+                    self.current = if g % 10 == 0 { (g as usize - 540) / 10 } else { 6 };
+                }
                 _ => {}
             }
         }
@@ -523,6 +540,14 @@ impl<'a> Reader<'a> {
         let motion_code = gs.iter().find(|(g, _)| group(*g) == Some(1)).copied();
         let nonmodal = gs.iter().find(|(g, _)| group(*g) == Some(0)).copied();
         for &(g, col) in &gs {
+            if g == 100 && w.get('L').is_some_and(|l| l.value == 2.0 || l.value == 20.0) {
+                self.set_offset(line, col, &w)?;
+                return Ok(false);
+            }
+            // (G92 offsets are never applied, so cancelling them changes nothing)
+            if matches!(g, 921 | 922) {
+                return Ok(false);
+            }
             if matches!(g, 100 | 520 | 920..=923) {
                 return self.err(line, col, format!("{}: offsets set by the program are not read", gname(g)));
             }
@@ -612,11 +637,63 @@ impl<'a> Reader<'a> {
         }
     }
 
+    /// The offset of axis `a` of the work coordinate system in use, mm.
+    fn offset(&self, a: usize) -> f64 {
+        self.offsets.get(self.current).map_or(0.0, |o| o[a])
+    }
+
+    /// `G10 L2 Pn` (the offsets of system n, 1 to 6 for G54 to G59, 0 the one in use) or
+    /// `G10 L20 Pn` (the offsets that make the present position read as the values given).
+    fn set_offset(&mut self, line: u32, col: u32, w: &Words) -> Result<()> {
+        let l20 = w.get('L').is_some_and(|l| l.value == 20.0);
+        let p = w.get('P').map_or(0.0, |p| p.value);
+        if !(p.fract() == 0.0 && (0.0..=6.0).contains(&p)) {
+            return self.err(line, col, format!("G10 P{p}: a work coordinate system is P1 to P6 (G54 to G59), or P0"));
+        }
+        let n = if p == 0.0 { self.current } else { p as usize - 1 };
+        if n >= 6 {
+            return self.err(line, col, "G10 with G59.1 to G59.3 in use: their offsets are not read");
+        }
+        for (a, c) in ['X', 'Y', 'Z'].into_iter().enumerate() {
+            let Some(word) = w.get(c) else { continue };
+            let v = word.value * self.unit();
+            let off = if l20 {
+                match self.pos[a] {
+                    Coord::At(at) => at - v,
+                    _ => {
+                        return self.err(
+                            line,
+                            word.col,
+                            format!("G10 L20 {c}: from a position the program does not state"),
+                        );
+                    }
+                }
+            } else {
+                v
+            };
+            if !limits::coord_ok(off) {
+                return self.err(
+                    line,
+                    word.col,
+                    format!("G10 {c}: an offset of {off:.6e} mm is beyond ±{} mm", limits::MAX_COORD_MM),
+                );
+            }
+            let said = format!("G{} offset {c}{off} mm", 54 + n);
+            if off != 0.0 && self.offsets[n][a] != off && !self.warnings.iter().any(|x| x.contains(&said)) {
+                self.warnings.push(format!(
+                    "line {line}: {said} applied to what follows in it (the path is in the coordinates of G54 at zero)"
+                ));
+            }
+            self.offsets[n][a] = off;
+        }
+        Ok(())
+    }
+
     /// Where axis `a` goes for a word of `v` (program units), absolute or incremental.
     fn axis(&mut self, line: u32, word: Word, a: usize, incremental: bool) -> Result<Coord> {
         let v = word.value * self.unit();
         let at = if !incremental {
-            v
+            v + self.offset(a)
         } else {
             match self.pos[a] {
                 Coord::At(p) => p + v,
@@ -875,7 +952,7 @@ impl<'a> Reader<'a> {
         } as usize;
         let old_z = self.pos[2];
         let (r, bottom) = if self.absolute {
-            (rw, zw)
+            (rw + self.offset(2), zw + self.offset(2))
         } else {
             match old_z {
                 Coord::At(z) => (z + rw, z + rw + zw),
@@ -1031,7 +1108,7 @@ impl<'a> Reader<'a> {
         if self.wcs.len() > 1 {
             let names: Vec<String> = self.wcs.iter().map(|&g| gname(g)).collect();
             self.warnings.push(format!(
-                "the program uses {} work coordinate systems ({}): they are read as one",
+                "the program uses {} work coordinate systems ({}): read with the offsets it sets (G10), zero otherwise",
                 self.wcs.len(),
                 names.join(", ")
             ));
@@ -1312,6 +1389,16 @@ mod tests {
         let q = rd("T1 M6\nG0 X0 Y0 Z1\nT2 M6\nG0 X1\n").unwrap();
         assert!(q.warnings.iter().any(|w| w.contains("changes tools 2 times") && w.contains("T2 at line 3")));
         assert!(rd("T1 M6\nG0 X0 Y0 Z1\nT1 M6\nG0 X1\n").unwrap().warnings.is_empty());
+        // work offsets set to zero (CAMotics' programs reset them so) move nothing
+        let z = rd("G10 L2 P1 X0 Y0 Z0\nG10 L2 P2 X0\nG55\nG92.1\nG0 X1 Y2 Z3\nG0 X4\n").unwrap();
+        assert_eq!(z.toolpath.moves.last().map(|m| m.to.to_array()), Some([4.0, 2.0, 3.0]));
+        // G55 moved by Y-101.6 (CAMotics' botomata): absolute words from it; L20 from where it is
+        let o =
+            rd("G0 X0 Y0 Z5\nG10 L2 P2 Y-101.6\nG55 G0 X1 Y2\nG91 G0 X1\nG90 G54 G0 X0 Y0\nG10 L20 P1 X10\nG0 X11\n")
+                .unwrap();
+        let to: Vec<[f64; 3]> = o.toolpath.moves.iter().map(|m| m.to.to_array()).collect();
+        assert_eq!(to, [[1.0, -99.6, 5.0], [2.0, -99.6, 5.0], [0.0, 0.0, 5.0], [1.0, 0.0, 5.0]]);
+        assert!(o.warnings.iter().any(|w| w.contains("G55 offset Y-101.6")), "{:?}", o.warnings);
     }
 
     #[test]
@@ -1346,6 +1433,10 @@ mod tests {
             ("G93", "line 1, column 1", "inverse time"),
             ("G0 X0 Y0 Z0\nG41 D1", "line 2, column 1", "cutter radius compensation"),
             ("G0 X0 Y0 Z0\nG92 X0", "line 2, column 1", "offsets set by the program"),
+            ("G0 X0 Y0 Z0\nG10 L2 P7 X1", "line 2, column 1", "P1 to P6"),
+            ("G10 L20 P1 X1", "line 1, column 12", "does not state"),
+            ("G0 X0 Y0 Z0\nG10 L1 P1 Z1", "line 2, column 1", "offsets set by the program"),
+            ("G91 G0 G43 Z-[#[2000+#4120]] H#4120", "line 1, column 14", "parameters and expressions"),
             ("G0 X0 Y0 Z0\nG53 G0 X0", "line 2, column 8", "G53 moves in X or Y"),
             ("G0 X0 Y0 Z0\nG1 X1 F0", "line 2, column 1", "F0"),
             ("G0 X0 Y0 Z0\nG1 X1", "line 2, column 1", "before any feed rate"),

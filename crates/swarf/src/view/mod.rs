@@ -440,7 +440,14 @@ pub fn of_plan(
     let smallest = programs.iter().map(|p| p.0.tool.diameter).fold(f64::INFINITY, f64::min);
     let sim = SimOptions { res: Some(sim.res_for(smallest)), ..sim.clone() };
     let total: usize = programs.iter().map(|p| p.0.moves.len()).sum();
-    let marks = removal_marks(total);
+    // (and where each program ends: the stock each tool leaves is read exactly)
+    let mut marks = removal_marks(total);
+    marks.extend(programs.iter().scan(0, |n, p| {
+        *n += p.0.moves.len();
+        Some(*n)
+    }));
+    marks.sort_unstable();
+    marks.dedup();
     let mut removal = Vec::new();
     let mut field: Option<Field> = None;
     let mut views = Vec::new();

@@ -786,10 +786,15 @@
       toolOn[p.index] = true;
       const c = paletteColour(p.index);
       const lab = document.createElement('label');
-      lab.innerHTML = `<input type="checkbox" data-tool="${p.index}" checked> <span class="sw" style="background:rgb(${c.map((x) => Math.round(x * 255)).join(',')})"></span>T${p.tool.number} Ø${p.tool.d} mm — ${p.name}`;
+      lab.innerHTML = `<input type="checkbox" data-tool="${p.index}" checked> <span class="sw" style="background:rgb(${c.map((x) => Math.round(x * 255)).join(',')})"></span>T${p.tool.number} Ø${p.tool.d} mm — ${esc(p.name)} ` +
+        `<button class="mini" data-after="${p.index}" title="Play to the end of this tool: the stock it leaves">after</button>`;
       tl.appendChild(lab);
     }
     tl.onchange = (e) => { const k = e.target.dataset.tool; if (k !== undefined) { toolOn[+k] = e.target.checked; applyFilters(); drawChart(); } };
+    tl.onclick = (e) => {
+      const k = e.target.dataset.after;
+      if (k !== undefined) { e.preventDefault(); play(false); const p = run.programs[+k]; seek(p.before + p.n); }
+    };
     $('slider').max = String(run.n);
   }
   function figures() {
@@ -912,6 +917,13 @@
     levels: () => allLevels().map((l) => ({ index: l.index, z: l.z, on: levelOn[l.index] !== false })),
     visibleLevels: () => [...new Set(groups.filter((g) => g.obj.visible && !g.rapid).map((g) => g.level))].sort((a, b) => a - b),
     drawnSegments: () => groups.filter((g) => g.obj.visible).reduce((a, g) => a + g.obj.geometry.drawRange.count, 0),
+    // where the end of move g of the run is on the page, in CSS pixels
+    screenOf: (g) => {
+      const [p, i] = locate(run, g);
+      const v = new THREE.Vector3(p.to[3 * i], p.to[3 * i + 1], p.to[3 * i + 2]).project(camera);
+      const r = $('gl').getBoundingClientRect();
+      return { x: r.left + (v.x + 1) / 2 * r.width, y: r.top + (1 - v.y) / 2 * r.height };
+    },
     stockCut: () => { if (!F) return 0; let c = 0; for (let q = 0; q < F.h.length; q++) if (F.h[q] < field.start[q] - 1e-3) c++; return c; },
   });
   main();
