@@ -387,22 +387,27 @@ pub fn of_rough(job: &Job, res: &RoughResult, sim: &SimOptions) -> Result<Scene>
     let end = end_of(&model, &field);
     let program =
         ProgramView::of(res.report.input.clone(), &res.toolpath, &res.gcode, res.replay.as_ref(), &res.report);
-    let mut solids = Vec::new();
-    if !job.fixtures.polys.is_empty() {
-        solids.push(Solid::Extrusion {
-            kind: "fixture",
-            area: job.fixtures.clone(),
-            z0: job.floor,
-            z1: job.stock_top.max(job.part_top) + 0.25 * (job.stock_top - job.floor).abs().max(1.0),
-        });
-    }
     Ok(Scene {
         title: format!("{} — {}", res.report.input, res.report.strategy),
         runs: vec![Run { name: res.report.input.clone(), programs: vec![program], removal, end: Some(end) }],
         field: Some(field),
-        solids,
+        solids: fixtures_of(job),
         notes: Vec::new(),
     })
+}
+
+/// A 2.5D job's fixtures, as their outlines standing from the floor to a quarter of the job's
+/// depth over its top (they are not cut, and stand out of the stock).
+fn fixtures_of(job: &Job) -> Vec<Solid> {
+    if job.fixtures.polys.is_empty() {
+        return Vec::new();
+    }
+    vec![Solid::Extrusion {
+        kind: "fixture",
+        area: job.fixtures.clone(),
+        z0: job.floor,
+        z1: job.stock_top.max(job.part_top) + 0.25 * (job.stock_top - job.floor).abs().max(1.0),
+    }]
 }
 
 /// The page of a 3D job's program (`swarf rough` on an STL part): the part's triangles, the
@@ -515,7 +520,6 @@ pub fn of_programs(
 ) -> Result<Scene> {
     let mut runs = Vec::new();
     let mut field = None;
-    let mut solids = Vec::new();
     let mut name_of_job = String::new();
     for (name, prog, gcode) in programs {
         let tp = &prog.toolpath;
@@ -564,16 +568,10 @@ pub fn of_programs(
         }
         runs.push(Run { name, programs: vec![v], removal, end: Some(end) });
     }
-    match job {
-        Against::Flat(j) if !j.fixtures.polys.is_empty() => solids.push(Solid::Extrusion {
-            kind: "fixture",
-            area: j.fixtures.clone(),
-            z0: j.floor,
-            z1: j.stock_top.max(j.part_top) + 0.25 * (j.stock_top - j.floor).abs().max(1.0),
-        }),
-        Against::Mesh(j) => solids.push(Solid::Mesh { kind: "part", tris: j.mesh.tris.clone() }),
-        _ => {}
-    }
+    let solids = match job {
+        Against::Flat(j) => fixtures_of(j),
+        Against::Mesh(j) => vec![Solid::Mesh { kind: "part", tris: j.mesh.tris.clone() }],
+    };
     let names: Vec<&str> = runs.iter().map(|r| r.name.as_str()).collect();
     Ok(Scene { title: format!("{} — {}", name_of_job, names.join(" vs ")), runs, field, solids, notes: Vec::new() })
 }
