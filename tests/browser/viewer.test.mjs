@@ -5,7 +5,7 @@
 //   2d       swarf rough examples/cases/pocket_islands.json --html …
 //   3d       swarf rough examples/3d/bowl_cavity.json --html …            (z-level, STL part)
 //   plan     swarf plan examples/3d/bowl_cavity.json --tools … --html … (a tool per colour)
-//   compare  swarf view FreeCAD's program and swarf's --case pocket_islands.json
+//   compare  swarf view FreeCAD's program and swarf's --case pocket_islands.json (side by side)
 //   big      swarf rough pocket_islands with a Ø1 tool: over 100 000 moves
 //
 // Each page: no console error; the canvas is not blank; the slider at the middle shows partly
@@ -173,9 +173,17 @@ describe('the viewer', { concurrency: false }, () => {
     // the figures side by side: a column per program
     assert.equal(await page.locator('#figures tr:first-child th').count(), 3);
     assert.match(await page.locator('#figures').textContent(), /freecad_adaptive_pocket_islands\.ngc/);
+    // the other program beside it in 3D, as it ends
+    assert.equal(await page.locator('#view2').isVisible(), true);
+    assert.equal(await canvasIsBlank(page, '#gl2'), false, 'the second view is blank');
+    assert.match(await page.locator('#hud2').textContent(), /^2d\.ngc: as it ends · removed [\d.]+ cm³ · 0 gouges/);
     await common(page, 'compare');
     await page.locator('#run').selectOption('1');
     assert.equal(await page.evaluate(() => window.swarf.moves()) > 0, true);
+    // now FreeCAD's beside swarf's, with its gouges marked
+    assert.match(await page.locator('#hud2').textContent(), /^freecad_adaptive_pocket_islands\.ngc: as it ends .* · 102 gouges/);
+    await page.locator('#side').uncheck();
+    assert.equal(await page.locator('#view2').isVisible(), false);
     assert.deepEqual(page.swarfErrors, []);
     await page.screenshot({ path: join(out, 'compare_swarf.png') });
     await page.close();

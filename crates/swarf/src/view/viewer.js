@@ -160,7 +160,12 @@
     new ResizeObserver(() => drawChart()).observe($('chartbox'));
     resize();
     const loop = () => {
-      if (needsRender) { needsRender = false; renderer.render(scene, camera); S.frames = (S.frames || 0) + 1; }
+      if (needsRender) {
+        needsRender = false;
+        renderer.render(scene, camera);
+        if (side && side.on) side.renderer.render(side.scene, camera);
+        S.frames = (S.frames || 0) + 1;
+      }
       requestAnimationFrame(loop);
     };
     requestAnimationFrame(loop);
@@ -169,6 +174,7 @@
     const v = $('view');
     const w = Math.max(v.clientWidth, 10), h = Math.max(v.clientHeight, 10);
     renderer.setSize(w, h, false);
+    if (side && side.renderer) side.renderer.setSize(w, h, false);
     camera.aspect = w / h;
     camera.updateProjectionMatrix();
     needsRender = true;
@@ -179,6 +185,13 @@
   const C_STOCK = [0.86, 0.76, 0.58], C_CUT = [0.93, 0.58, 0.3], C_PART = [0.47, 0.58, 0.72];
   function buildField() {
     if (!field) return;
+    F = makeField(field.start);
+    scene.add(F.mesh);
+    F.mesh.geometry.computeBoundingBox();
+    box.union(F.mesh.geometry.boundingBox);
+  }
+  // a mesh of the field at `heights` (its cells' centres, walls down to the bottom at its edges)
+  function makeField(heights) {
     const { nx, ny, x0, y0, res, bottom } = field;
     const n = nx * ny;
     const start = field.start, part = field.part;
@@ -215,13 +228,11 @@
     g.setIndex(new THREE.BufferAttribute(n + extra > 65535 ? new Uint32Array(idx) : new Uint16Array(idx), 1));
     const mat = new THREE.MeshPhongMaterial({ vertexColors: true, flatShading: true, shininess: 8, side: THREE.DoubleSide });
     const mesh = new THREE.Mesh(g, mat);
-    scene.add(mesh);
-    F = { mesh, pos, colour, pa, ca, h: new Float32Array(start), bottomOf, vol: 0, dirty: null, n };
-    paintField(0, ny - 1);
-    g.computeBoundingBox();
-    box.union(g.boundingBox);
+    const f = { mesh, pos, colour, pa, ca, h: new Float32Array(heights), bottomOf, vol: 0, dirty: null, n };
+    paintField(0, ny - 1, f);
+    return f;
   }
-  function paintField(j0, j1) {
+  function paintField(j0, j1, F) {
     const { nx } = field, start = field.start, part = field.part, h = F.h;
     for (let v = j0 * nx; v < (j1 + 1) * nx; v++) {
       if (Number.isNaN(start[v])) continue;
@@ -236,7 +247,7 @@
   function uploadField() {
     if (!F || !F.dirty) return;
     const [j0, j1] = F.dirty; F.dirty = null;
-    paintField(j0, j1);
+    paintField(j0, j1, F);
     const nx = field.nx;
     for (const attr of [F.pa, F.ca]) {
       attr.clearUpdateRanges();
@@ -364,7 +375,18 @@
   let groups = [];
   function buildPath() {
     for (const g of groups) { g.obj.geometry.dispose(); pathRoot.remove(g.obj); }
-    groups = [];
+    groups = makeGroups(run);
+    for (const g of groups) {
+      g.obj.geometry.computeBoundingBox();
+      box.union(g.obj.geometry.boundingBox);
+      pathRoot.add(g.obj);
+    }
+    colourPath();
+    applyFilters();
+  }
+  // the path of run `run` as line segments, one object per program, level and rapid or feed
+  function makeGroups(run) {
+    const groups = [];
     const byKey = new Map();
     const step = Math.PI / 24;
     const tmp = [];
@@ -415,16 +437,12 @@
       g.obj = new THREE.LineSegments(geo, mat);
       if (g.rapid) g.obj.computeLineDistances();
       g.obj.userData.group = g;
-      geo.computeBoundingBox();
-      box.union(geo.boundingBox);
-      pathRoot.add(g.obj);
     }
-    colourPath();
-    applyFilters();
+    return groups;
   }
   function colourOfMove(mode, p, i) {
     switch (mode) {
-      case 'feed': return feedColour(p.feed[i] / (run.maxFeed || 1));
+      case 'feed': return feedColour(p.feed[i] / (p.maxFeed || 1));
       case 'level': return paletteColour(p.lv[i]);
       case 'tool': return paletteColour(p.index);
       default: {
@@ -434,8 +452,15 @@
   }
   function colourPath() {
     const mode = $('colourby').value;
+    colourGroups(groups, run, mode);
+    if (side) colourGroups(side.groups, side.run, mode);
+    legend(mode);
+    needsRender = true;
+  }
+  function colourGroups(groups, run, mode) {
     run.maxFeed = 0;
     for (const p of run.programs) for (let i = 0; i < p.n; i++) run.maxFeed = Math.max(run.maxFeed, p.feed[i]);
+    for (const p of run.programs) p.maxFeed = run.maxFeed;
     for (const g of groups) {
       if (g.rapid) continue;
       let last = -1, c = null;
@@ -446,8 +471,6 @@
       }
       g.obj.geometry.attributes.color.needsUpdate = true;
     }
-    legend(mode);
-    needsRender = true;
   }
   function updatePathRange() {
     const all = $('show-ahead').checked;
@@ -465,6 +488,7 @@
   let levelOn = [], toolOn = [];
   function applyFilters() {
     const rapids = $('show-rapids').checked;
+    if (side && side.on) for (const g of side.groups) g.obj.visible = !g.rapid || rapids;
     for (const g of groups) g.obj.visible = levelOn[g.level] !== false && toolOn[g.prog.index] !== false && (!g.rapid || rapids);
     markRoot.visible = $('show-marks').checked;
     restRoot.visible = $('show-rest').checked;
@@ -481,6 +505,13 @@
   }
   function buildMarks() {
     markRoot.clear(); restRoot.clear();
+    const m = makeMarks(run);
+    for (const o of m.marks.children.slice()) markRoot.add(o);
+    for (const o of m.rest.children.slice()) restRoot.add(o);
+    S.marks = m.counts;
+  }
+  function makeMarks(run) {
+    const markRoot = new THREE.Group(), restRoot = new THREE.Group();
     const entries = [], plunges = [], gouges = [], collisions = [], rest = [];
     for (const p of run.programs) {
       for (let i = 0; i < p.n; i++) {
@@ -515,7 +546,8 @@
     if (collisions.length) markRoot.add(points(collisions, 0xff6a00, 9));
     if (gouges.length) markRoot.add(points(gouges, 0xe00000, 7));
     if (rest.length) restRoot.add(points(rest, 0xff8c1a, 2));
-    S.marks = { entries: entries.length / 3, plunges: plunges.length / 3, gouges: gouges.length / 3, rapidCollisions: collisions.length / 3, rest: rest.length / 3 };
+    const counts = { entries: entries.length / 3, plunges: plunges.length / 3, gouges: gouges.length / 3, rapidCollisions: collisions.length / 3, rest: rest.length / 3 };
+    return { marks: markRoot, rest: restRoot, counts };
   }
   function heightAt(x, y, h) {
     if (!field) return 0;
@@ -578,6 +610,62 @@
     if (k === 0) { const p = run.programs[0]; placeToolAt(p, -1, p.start); return; }
     const [p, i] = locate(run, k - 1);
     placeToolAt(p, i, [p.to[3 * i], p.to[3 * i + 1], p.to[3 * i + 2]]);
+  }
+
+  // ---- side by side: another run beside the one playing --------------------------------------
+  // The other run (the next one) as it ends: its path, the simulator's stock after it, its
+  // marks and the solids, seen through the same camera; turning either view turns both.
+  let side = null;
+  function lights(sc) {
+    sc.add(new THREE.HemisphereLight(0xffffff, 0x8a8f99, 1.6));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+    sun.position.set(-0.4, -0.7, 1.0);
+    sc.add(sun);
+  }
+  function buildSide() {
+    const on = runs.length > 1 && $('side').checked;
+    $('view2').style.display = on ? '' : 'none';
+    if (side) {
+      side.scene.traverse((o) => { if (o.userData.group) o.geometry.dispose(); });
+      if (side.field) side.field.mesh.geometry.dispose();
+      side.on = false;
+    }
+    if (!on) { resize(); needsRender = true; return; }
+    if (!side) {
+      const r2 = new THREE.WebGLRenderer({ canvas: $('gl2'), antialias: true, preserveDrawingBuffer: true });
+      r2.setPixelRatio(renderer.getPixelRatio());
+      r2.setClearColor(0xf5f3ee, 1);
+      const c2 = new THREE.OrbitControls(camera, $('gl2'));
+      c2.target = controls.target;
+      c2.addEventListener('change', () => { needsRender = true; });
+      side = { renderer: r2, controls: c2 };
+    }
+    const other = runs[(run.index + 1) % runs.length];
+    const sc = new THREE.Scene();
+    lights(sc);
+    side.scene = sc; side.run = other; side.field = null;
+    if (field) {
+      side.field = makeField(other.end || field.start);
+      sc.add(side.field.mesh);
+    }
+    side.groups = makeGroups(other);
+    for (const g of side.groups) { g.obj.visible = !g.rapid || $('show-rapids').checked; sc.add(g.obj); }
+    colourGroups(side.groups, other, $('colourby').value);
+    const m = makeMarks(other);
+    sc.add(m.marks, m.rest);
+    for (const o of solidRoot.children) sc.add(new THREE.Mesh(o.geometry, o.material));
+    side.on = true;
+    let removed = '';
+    if (field && other.end) {
+      let v = 0;
+      const st = field.start, cell = field.res * field.res;
+      for (let q = 0; q < st.length; q++) if (!Number.isNaN(st[q]) && !Number.isNaN(other.end[q])) v += (st[q] - other.end[q]) * cell;
+      removed = ` · removed ${(v / 1000).toFixed(2)} cm³`;
+    }
+    $('hud2').textContent = `${other.name}: as it ends${removed} · ${m.counts.gouges} gouges`;
+    S.side = { run: other.index, marks: m.counts };
+    resize();
+    needsRender = true;
   }
 
   // ---- camera -----------------------------------------------------------------------------
@@ -841,6 +929,7 @@
       } else { resetStock(); F.k = 0; }
     }
     seek(run.n);
+    if (runs.length > 1) buildSide();
   }
   let playing = false, lastT = 0;
   function play(on) {
@@ -886,6 +975,7 @@
       for (const b of document.querySelectorAll('#views button')) b.onclick = () => view(b.dataset.view);
       $('colourby').onchange = colourPath;
       for (const id of ['show-rapids', 'show-stock', 'show-solids', 'show-marks', 'show-rest']) $(id).onchange = applyFilters;
+      $('side').onchange = buildSide;
       $('show-ahead').onchange = () => { updatePathRange(); needsRender = true; };
       $('levels-all').onclick = () => { for (const c of $('levels').querySelectorAll('input')) { c.checked = true; levelOn[+c.dataset.level] = true; } applyFilters(); };
       $('levels-none').onclick = () => { for (const c of $('levels').querySelectorAll('input')) { c.checked = false; levelOn[+c.dataset.level] = false; } applyFilters(); };
