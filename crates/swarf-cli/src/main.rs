@@ -1100,8 +1100,10 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
     let mut inputs: Vec<&Path> = reading.files.iter().map(PathBuf::as_path).collect();
     inputs.push(&a.tools);
     let report_path = a.report.clone().unwrap_or_else(|| a.output_dir.join("plan.json"));
-    // (the report refused before the work; the programs, named after the plan, when written)
-    output::check(&[&report_path], &inputs)?;
+    // (the report and the page refused before the work; the programs, named after the plan,
+    // when written)
+    let early: Vec<&Path> = std::iter::once(report_path.as_path()).chain(a.html.as_deref()).collect();
+    output::check(&early, &inputs)?;
     let d = SeqOptions::DEFAULT;
     let opts = SeqOptions {
         decomposition: match a.decomposition {
@@ -1228,8 +1230,7 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
         let progs: Vec<(&swarf::Toolpath, String, String)> =
             posted.iter().map(|(tp, name, gcode)| (tp, name.clone(), gcode.clone())).collect();
         let title = format!("{input_name} — tool sequence {}", best.tools.join(", "));
-        let scene =
-            swarf::view::of_plan(&job, &progs, &swarf::SimOptions::DEFAULT, title).map_err(|e| e.in_file(&a.input))?;
+        let scene = swarf::view::of_plan(&job, &progs, &opts.sim, title).map_err(|e| e.in_file(&a.input))?;
         files.push(OutputFile::new(html, scene.html()));
     }
     // (all refused before the folder is made: a refused run leaves nothing)

@@ -113,4 +113,14 @@ fn view_refuses_a_bad_program_naming_the_line_and_writes_nothing() {
     let run = swarf(dir.path(), &["view", "ok.ngc", "--case", case.to_str().unwrap(), "-o", "ok.ngc"]);
     assert_eq!(run.status.code(), Some(2), "{}", String::from_utf8_lossy(&run.stderr));
     assert!(std::fs::read_to_string(dir.path().join("ok.ngc")).unwrap().starts_with("G21 G90"), "the program kept");
+    // plan's page over its tool database: refused before the search, no folder made
+    let tools = dir.write("tools.json", std::fs::read(repo("examples/tools/table1.json")).unwrap());
+    let bowl = repo("examples/3d/bowl_cavity.json");
+    let run = swarf(
+        dir.path(),
+        &["plan", bowl.to_str().unwrap(), "--tools", "tools.json", "--output-dir", "p", "--html", "tools.json"],
+    );
+    assert_eq!(run.status.code(), Some(2), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(!dir.path().join("p").exists());
+    assert_eq!(std::fs::read(&tools).unwrap(), std::fs::read(repo("examples/tools/table1.json")).unwrap());
 }
