@@ -217,14 +217,14 @@ pub fn lines_of(gcode: &str, tp: &Toolpath) -> Vec<u32> {
 
 /// The field of a model: its cells in blocks of `f` × `f` (the fewest that keep the field
 /// under [`MAX_FIELD_CELLS`]), each read at its centre.
-fn field_of(model: &RasterSim, bottom: f64) -> (Field, usize) {
+fn field_of(model: &RasterSim, bottom: f64) -> Field {
     let g = model.grid;
     let f = ((g.nx * g.ny) as f64 / MAX_FIELD_CELLS as f64).sqrt().ceil().max(1.0) as usize;
     let (nx, ny) = (g.nx.div_ceil(f), g.ny.div_ceil(f));
     let finite = |v: f32| if v.is_finite() { v } else { f32::NAN };
     let start = blocks(&g, model.initial_heights(), f, nx, ny).map(finite).collect();
     let part = blocks(&g, model.part_heights(), f, nx, ny).map(finite).collect();
-    (Field { x0: g.x0, y0: g.y0, res: g.res * f as f64, nx, ny, start, part, bottom }, f)
+    Field { x0: g.x0, y0: g.y0, res: g.res * f as f64, nx, ny, start, part, bottom }
 }
 
 /// The values of `v` (over `g`) at the centres of blocks of `f` × `f` cells.
@@ -381,7 +381,7 @@ pub fn of_rough(job: &Job, res: &RoughResult, sim: &SimOptions) -> Result<Scene>
     let regions = job.regions(job.radius(), 0.0)?;
     let mut model = RasterSim::new(job, &regions, &sim)?;
     model.track_exact = false;
-    let (field, _) = field_of(&model, job.floor);
+    let field = field_of(&model, job.floor);
     let marks = removal_marks(res.toolpath.moves.len());
     let removal = cut_reading(&mut model, &res.toolpath, &marks, 0, 0.0);
     let end = end_of(&model, &field);
@@ -418,7 +418,7 @@ pub fn of_mesh_rough(job: &MeshJob, res: &RoughResult, sim: &SimOptions) -> Resu
     });
     let mut model = crate::sim::heights::mesh_model(job, &sim)?;
     model.track_exact = false;
-    let (field, _) = field_of(&model, job.floor);
+    let field = field_of(&model, job.floor);
     let marks = removal_marks(res.toolpath.moves.len());
     let removal = cut_reading(&mut model, &res.toolpath, &marks, 0, 0.0);
     let end = end_of(&model, &field);
@@ -463,7 +463,7 @@ pub fn of_plan(
         let mut model = crate::sim::heights::mesh_model_after(job, &tp.tool, stock.as_ref(), &sim)?;
         model.track_exact = false;
         if field.is_none() {
-            field = Some(field_of(&model, job.floor).0);
+            field = Some(field_of(&model, job.floor));
         }
         let (mut rp, got) = replay_reading(&mut model, tp, &marks, before, base);
         // (the sequence's models keep no cuts for the exact engagement: the chart reads the
@@ -538,7 +538,7 @@ pub fn of_programs(
                 (crate::sim::heights::mesh_model_after(j, &tp.tool, None, &sim)?, j.cutting.clone(), j.floor)
             }
         };
-        let (f, _) = field_of(&model, floor);
+        let f = field_of(&model, floor);
         let marks = removal_marks(tp.moves.len());
         let (mut rp, removal) = replay_reading(&mut model, tp, &marks, 0, 0.0);
         let rest = match job {
