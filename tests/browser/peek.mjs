@@ -11,7 +11,7 @@ try {
   const st = await page.evaluate((move) => {
     const s = window.swarf;
     if (s.error) return { error: s.error };
-    if (move === 'mid') { const n = s.moves(); s.seek(s.removalMarks().reduce((a, b) => (Math.abs(b - n / 2) < Math.abs(a - n / 2) ? b : a))); } else if (move !== undefined) s.seek(+move);
+    if (move === 'mid') { const n = s.moves(); const m = s.removalMarks(); s.seek(m.length ? m.reduce((a, b) => (Math.abs(b - n / 2) < Math.abs(a - n / 2) ? b : a)) : n / 2); } else if (move !== undefined) s.seek(+move);
     return { readyMs: s.readyMs, moves: s.moves(), k: s.position(), removed: s.removedVolume(), sim: s.simulatorVolume(), levels: s.levels().length, marks: s.marks };
   }, move);
   await page.waitForTimeout(300);
