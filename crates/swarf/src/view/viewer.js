@@ -132,7 +132,10 @@
     const [a, b, v] = u < 0.5 ? [c0, c1, u * 2] : [c1, c2, u * 2 - 1];
     return [0, 1, 2].map((c) => a[c] + (b[c] - a[c]) * v);
   }
-  function paletteColour(k) { col.setHex(PALETTE[k % PALETTE.length]); return [col.r, col.g, col.b]; }
+  // (the colours here are sRGB, as the legend's CSS shows them; `lin` turns one into the
+  // linear values three.js expects of vertex colours, so that the lines match the legend)
+  function paletteColour(k) { const h = PALETTE[k % PALETTE.length]; return [(h >> 16 & 255) / 255, (h >> 8 & 255) / 255, (h & 255) / 255]; }
+  function lin(c) { col.setRGB(c[0], c[1], c[2], THREE.SRGBColorSpace); return [col.r, col.g, col.b]; }
 
   // ---- three.js scene --------------------------------------------------------------------
   let renderer, scene, camera, controls, pathRoot, markRoot, restRoot, solidRoot, tool, highlight;
@@ -466,7 +469,7 @@
       let last = -1, c = null;
       for (let s = 0; s < g.segs; s++) {
         const gm = g.segMove[s];
-        if (gm !== last) { last = gm; c = colourOfMove(mode, g.prog, gm - g.prog.before); }
+        if (gm !== last) { last = gm; c = lin(colourOfMove(mode, g.prog, gm - g.prog.before)); }
         g.colour.set(c, s * 6); g.colour.set(c, s * 6 + 3);
       }
       g.obj.geometry.attributes.color.needsUpdate = true;
