@@ -299,6 +299,11 @@ struct ViewArgs {
     /// The tool's diameter, mm (default: the job's).
     #[arg(long, value_name = "MM")]
     tool_diameter: Option<f64>,
+    /// A program that changes tools (M6): the diameter of tool N, mm (repeat for each tool;
+    /// a tool not named is the job's). Each tool's moves are replayed on what the ones before
+    /// it left, a tool per colour.
+    #[arg(long = "tool", value_name = "N=MM")]
+    tools: Vec<String>,
     /// Simulation cell size, mm (default: a hundredth of the tool, 0.02 to 0.1 mm).
     #[arg(long, value_name = "MM")]
     res: Option<f64>,
@@ -1288,6 +1293,22 @@ fn view(a: ViewArgs) -> Result<(), Failure> {
         Input::Flat(j) => j.cutting.tool.clone(),
         Input::Mesh(j) => j.cutting.tool.clone(),
     };
+    // --tool N=MM
+    let mut sizes: Vec<(u32, f64)> = Vec::new();
+    for t in &a.tools {
+        let parsed =
+            t.split_once('=').and_then(|(n, d)| Some((n.trim().parse::<u32>().ok()?, d.trim().parse::<f64>().ok()?)));
+        let Some((n, d)) = parsed else {
+            return Err(Failure {
+                user: true,
+                msg: format!("--tool {t}: expected N=MM, a tool number and its diameter"),
+            });
+        };
+        swarf::Tool { diameter: d, number: n, flutes: 2 }
+            .validate()
+            .map_err(|e| Failure { user: true, msg: format!("--tool {t}: {e}") })?;
+        sizes.push((n, d));
+    }
     let mut programs = Vec::new();
     for path in &a.programs {
         let text = std::fs::read(path).map_err(|e| swarf::Error::input(path, "file", e.to_string()))?;
@@ -1302,7 +1323,25 @@ fn view(a: ViewArgs) -> Result<(), Failure> {
             }
         }
         let name = path.file_name().and_then(|s| s.to_str()).unwrap_or("program").to_string();
-        programs.push((name, prog, text));
+        let tool_of = |n: Option<u32>| {
+            let d = n.and_then(|n| sizes.iter().find(|s| s.0 == n)).map_or(tool.diameter, |s| s.1);
+            swarf::Tool { diameter: d, number: n.unwrap_or(tool.number), flutes: tool.flutes }
+        };
+        if !a.quiet && prog.tools.len() > 1 {
+            for t in &prog.tools {
+                if t.number.is_none_or(|n| !sizes.iter().any(|s| s.0 == n)) {
+                    eprintln!(
+                        "swarf: warning: {}: tool {} (line {}) has no --tool N=MM: read as the job's Ø{} mm",
+                        path.display(),
+                        t.number.map_or("without a number".into(), |n| format!("T{n}")),
+                        t.line,
+                        tool.diameter
+                    );
+                }
+            }
+        }
+        let pieces = prog.by_tool(&tool_of);
+        programs.push(swarf::view::ReadProgram { name, pieces, units: prog.units, gcode: text });
     }
     let against = match &input {
         Input::Flat(j) => swarf::view::Against::Flat(j),

@@ -124,3 +124,39 @@ fn view_refuses_a_bad_program_naming_the_line_and_writes_nothing() {
     assert!(!dir.path().join("p").exists());
     assert_eq!(std::fs::read(&tools).unwrap(), std::fs::read(repo("examples/tools/table1.json")).unwrap());
 }
+
+#[test]
+fn a_program_that_changes_tools_is_replayed_a_tool_after_the_other() {
+    let dir = TempDir::new("view-tools");
+    let case = repo("examples/cases/round_pocket.json");
+    let case = case.to_str().unwrap();
+    for (d, out) in [("10", "d10.ngc"), ("6", "d6.ngc")] {
+        let run = swarf(dir.path(), &["rough", case, "--tool-diameter", d, "-o", out, "-q"]);
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    }
+    // the Ø10 program, then the Ø6 one as tool 2 (one program end, at the end)
+    let d10 = std::fs::read_to_string(dir.path().join("d10.ngc")).unwrap();
+    let d6 = std::fs::read_to_string(dir.path().join("d6.ngc")).unwrap();
+    let first: String = d10.lines().filter(|l| l.trim() != "M2").map(|l| format!("{l}\n")).collect();
+    dir.write("both.ngc", first + &d6.replace("T1 M6", "T2 M6"));
+    let run =
+        swarf(dir.path(), &["view", "both.ngc", "--case", case, "--tool", "1=10", "--tool", "2=6", "-o", "p.html"]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let h = head(&std::fs::read_to_string(dir.path().join("p.html")).unwrap());
+    let run0 = &h["runs"][0];
+    let progs = run0["programs"].as_array().unwrap();
+    assert_eq!(progs.len(), 2, "a piece per tool");
+    assert_eq!((progs[0]["tool"]["d"].as_f64(), progs[1]["tool"]["d"].as_f64()), (Some(10.0), Some(6.0)));
+    // the Ø6 replayed on what the Ø10 left: no gouge, and it removes less than the Ø10
+    let n0 = progs[0]["moves"].as_u64().unwrap();
+    let removal = run0["removal"].as_array().unwrap();
+    let at = |k: u64| removal.iter().find(|r| r[0] == k).map(|r| r[1].as_f64().unwrap());
+    let (after10, all) = (at(n0).expect("a reading where the Ø10 ends"), removal.last().unwrap()[1].as_f64().unwrap());
+    assert!(after10 > 0.5 * all && all > after10, "{after10} then {all}");
+    assert!(progs.iter().all(|p| p["gouges"].as_array().unwrap().is_empty()));
+    // a size that is not N=MM
+    let run = swarf(dir.path(), &["view", "both.ngc", "--case", case, "--tool", "2", "-o", "q.html"]);
+    assert_eq!(run.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("--tool 2: expected N=MM"));
+    assert!(!dir.path().join("q.html").exists());
+}

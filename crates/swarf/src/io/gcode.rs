@@ -57,6 +57,46 @@ pub struct Program {
     pub units: &'static str,
     /// What was read other than as written, or may not be what the program means.
     pub warnings: Vec<String>,
+    /// The tools the program changes to (`M6`), in order, each with the first move it cuts
+    /// (empty when the program changes tools at most once before its first move: one tool).
+    pub tools: Vec<ToolSpan>,
+}
+
+/// A tool of a program that changes tools, and where its moves begin.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ToolSpan {
+    /// The tool number (`T`), if the program gave one.
+    pub number: Option<u32>,
+    /// Its first move in [`Program::toolpath`]; its moves run to the next span's first.
+    pub first_move: usize,
+    /// The line of its `M6`.
+    pub line: u32,
+}
+
+impl Program {
+    /// The program cut at its tool changes: a toolpath per tool (starting where the one before
+    /// it ended), with the source lines of its moves; `tool` gives the [`Tool`] of a tool
+    /// number. One piece, with the program's own tool, when it does not change tools.
+    pub fn by_tool(&self, tool: &dyn Fn(Option<u32>) -> Tool) -> Vec<(Toolpath, Vec<u32>)> {
+        let tp = &self.toolpath;
+        if self.tools.len() < 2 {
+            let t = self.tools.first().map_or_else(|| tp.tool.clone(), |s| tool(s.number));
+            return vec![(Toolpath { tool: t, ..tp.clone() }, self.lines.clone())];
+        }
+        let mut out = Vec::new();
+        for (k, span) in self.tools.iter().enumerate() {
+            let a = if k == 0 { 0 } else { span.first_move };
+            let b = self.tools.get(k + 1).map_or(tp.moves.len(), |n| n.first_move);
+            if b <= a {
+                continue;
+            }
+            let start = if a == 0 { tp.start } else { tp.moves[a - 1].to };
+            let mut piece = Toolpath::new(tool(span.number), start, tp.clearance_z);
+            piece.moves = tp.moves[a..b].to_vec();
+            out.push((piece, self.lines[a..b].to_vec()));
+        }
+        out
+    }
 }
 
 /// LinuxCNC's `CENTER_ARC_RADIUS_TOLERANCE_MM`: how far the radius to an arc's end may differ
@@ -1099,7 +1139,7 @@ impl<'a> Reader<'a> {
                 .map(|(t, l)| format!("{} at line {l}", t.map_or("a tool".into(), |t| format!("T{t}"))))
                 .collect();
             self.warnings.push(format!(
-                "the program changes tools {} times ({}{}): it is read as one program for the tool given",
+                "the program changes tools {} times ({}{}): each tool's moves are read apart (a tool's size is not in a program: --tool N=MM gives it)",
                 self.changes.len(),
                 what.join(", "),
                 if self.changes.len() > 5 { ", …" } else { "" }
@@ -1127,7 +1167,20 @@ impl<'a> Reader<'a> {
             self.warnings.push("the program changes units (G20, G21) after its first move".into());
         }
         let units = if self.units.unwrap_or(self.inch) { "inch" } else { "mm" };
-        Ok(Program { toolpath: tp, lines, units, warnings: self.warnings })
+        // each tool change's first move: the first whose line follows its M6
+        let mut tools: Vec<ToolSpan> = Vec::new();
+        for &(number, line) in &self.changes {
+            let first_move = lines.partition_point(|&l| l <= line);
+            if let Some(last) = tools.last_mut()
+                && last.first_move == first_move
+            {
+                // (two changes before one move: the later one cuts)
+                *last = ToolSpan { number, first_move, line };
+            } else {
+                tools.push(ToolSpan { number, first_move, line });
+            }
+        }
+        Ok(Program { toolpath: tp, lines, units, warnings: self.warnings, tools })
     }
 }
 
@@ -1389,6 +1442,14 @@ mod tests {
         let q = rd("T1 M6\nG0 X0 Y0 Z1\nT2 M6\nG0 X1\n").unwrap();
         assert!(q.warnings.iter().any(|w| w.contains("changes tools 2 times") && w.contains("T2 at line 3")));
         assert!(rd("T1 M6\nG0 X0 Y0 Z1\nT1 M6\nG0 X1\n").unwrap().warnings.is_empty());
+        // each tool's moves, cut apart with the tools a caller names
+        let two = rd("T1 M6\nG0 X0 Y0 Z1\nG1 X2 F100\nT2 M6\nG0 X1 Y1\n").unwrap();
+        let spans: Vec<(Option<u32>, usize)> = two.tools.iter().map(|t| (t.number, t.first_move)).collect();
+        assert_eq!(spans, [(Some(1), 0), (Some(2), 1)]);
+        let parts = two.by_tool(&|n| Tool { diameter: f64::from(n.unwrap_or(9)), number: n.unwrap_or(0), flutes: 2 });
+        let got: Vec<(f64, usize, [f64; 3])> =
+            parts.iter().map(|(tp, lines)| (tp.tool.diameter, lines.len(), tp.start.to_array())).collect();
+        assert_eq!(got, [(1.0, 1, [0.0, 0.0, 1.0]), (2.0, 1, [2.0, 0.0, 1.0])]);
         // work offsets set to zero (CAMotics' programs reset them so) move nothing
         let z = rd("G10 L2 P1 X0 Y0 Z0\nG10 L2 P2 X0\nG55\nG92.1\nG0 X1 Y2 Z3\nG0 X4\n").unwrap();
         assert_eq!(z.toolpath.moves.last().map(|m| m.to.to_array()), Some([4.0, 2.0, 3.0]));

@@ -341,7 +341,18 @@ impl ProgramView {
     /// A program as planned and proven: `tp` with its G-code, the replay's samples and events,
     /// and the report's figures.
     pub fn of(name: impl Into<String>, tp: &Toolpath, gcode: &str, replay: Option<&Replay>, report: &Report) -> Self {
-        let lines = lines_of(gcode, tp);
+        Self::with_lines(name, tp, lines_of(gcode, tp), gcode, replay, report)
+    }
+
+    /// The same with the G-code line of each move given.
+    pub fn with_lines(
+        name: impl Into<String>,
+        tp: &Toolpath,
+        lines: Vec<u32>,
+        gcode: &str,
+        replay: Option<&Replay>,
+        report: &Report,
+    ) -> Self {
         let mut v = ProgramView {
             name: name.into(),
             toolpath: tp.clone(),
@@ -510,63 +521,108 @@ pub enum Against<'a> {
     Mesh(&'a MeshJob),
 }
 
-/// The page of programs read from G-code (`swarf view`), each replayed on its own fresh stock
-/// of `job` by swarf's simulator, one run each: two programs for the same part side by side.
-/// `programs` are (name, program as read, its G-code).
-pub fn of_programs(
-    job: Against<'_>,
-    programs: Vec<(String, crate::io::gcode::Program, String)>,
-    sim: &SimOptions,
-) -> Result<Scene> {
+/// A program read from G-code, as [`of_programs`] takes it.
+#[derive(Debug, Clone)]
+pub struct ReadProgram {
+    /// Its name (the file's).
+    pub name: String,
+    /// Its pieces, one per tool ([`crate::io::gcode::Program::by_tool`]), each with the source
+    /// lines of its moves.
+    pub pieces: Vec<(Toolpath, Vec<u32>)>,
+    /// The units it was read in.
+    pub units: &'static str,
+    /// Its text.
+    pub gcode: String,
+}
+
+/// The page of programs read from G-code (`swarf view`), each replayed by swarf's simulator on
+/// its own fresh stock of `job`, one run each: two programs for the same part side by side. A
+/// program that changes tools is a run of one piece per tool, each replayed on what the ones
+/// before it left, as a tool sequence is.
+pub fn of_programs(job: Against<'_>, programs: Vec<ReadProgram>, sim: &SimOptions) -> Result<Scene> {
     let mut runs = Vec::new();
     let mut field = None;
-    let mut name_of_job = String::new();
-    for (name, prog, gcode) in programs {
-        let tp = &prog.toolpath;
-        let (mut model, cutting, floor) = match job {
-            Against::Flat(j) => {
-                name_of_job = j.name.clone();
-                let mut j2 = j.clone();
-                j2.cutting.tool = tp.tool.clone();
-                let sim = fitted(sim, tp.tool.diameter, j.stock.bounds());
-                let regions = j2.regions(j2.radius(), 0.0)?;
-                (RasterSim::new(&j2, &regions, &sim)?, j.cutting.clone(), j.floor)
+    let (name_of_job, cutting, floor) = match job {
+        Against::Flat(j) => (j.name.clone(), j.cutting.clone(), j.floor),
+        Against::Mesh(j) => (j.name.clone(), j.cutting.clone(), j.floor),
+    };
+    for prog in programs {
+        let total: usize = prog.pieces.iter().map(|p| p.0.moves.len()).sum();
+        let mut marks = removal_marks(total);
+        marks.extend(prog.pieces.iter().scan(0, |n, p| {
+            *n += p.0.moves.len();
+            Some(*n)
+        }));
+        marks.sort_unstable();
+        marks.dedup();
+        let (mut before, mut base) = (0usize, 0.0);
+        let mut stock: Option<crate::sim::HeightMap> = None;
+        let (mut views, mut removal, mut end) = (Vec::new(), Vec::new(), None);
+        let several = prog.pieces.len() > 1;
+        for (tp, lines) in &prog.pieces {
+            let mut model = match job {
+                Against::Flat(j) => {
+                    let mut j2 = j.clone();
+                    j2.cutting.tool = tp.tool.clone();
+                    let sim = SimOptions {
+                        heights: stock.take().map(std::sync::Arc::new),
+                        ..fitted(sim, tp.tool.diameter, j.stock.bounds())
+                    };
+                    let regions = j2.regions(j2.radius(), 0.0)?;
+                    RasterSim::new(&j2, &regions, &sim)?
+                }
+                Against::Mesh(j) => {
+                    let sim = fitted(sim, tp.tool.diameter, Some((j.stock_lo.truncate(), j.stock_hi.truncate())));
+                    crate::sim::heights::mesh_model_after(j, &tp.tool, stock.as_ref(), &sim)?
+                }
+            };
+            if field.is_none() {
+                field = Some(field_of(&model, floor));
             }
-            Against::Mesh(j) => {
-                name_of_job = j.name.clone();
-                let sim = fitted(sim, tp.tool.diameter, Some((j.stock_lo.truncate(), j.stock_hi.truncate())));
-                (crate::sim::heights::mesh_model_after(j, &tp.tool, None, &sim)?, j.cutting.clone(), j.floor)
+            let (mut rp, got) = replay_reading(&mut model, tp, &marks, before, base);
+            removal.extend(got);
+            if before > 0 {
+                // (the exact measure starts from the stock outline, not from what the tools
+                // before left: a later tool's engagement is read by circumference pixels,
+                // paper 1 eq. 4, as a tool sequence's)
+                for s in &mut rp.samples {
+                    s.tea = s.tea_pixel;
+                }
             }
-        };
-        let f = field_of(&model, floor);
-        let marks = removal_marks(tp.moves.len());
-        let (mut rp, removal) = replay_reading(&mut model, tp, &marks, 0, 0.0);
-        let rest = match job {
-            Against::Flat(_) => {
-                rp.rest_cells = model.rest_cells();
-                model.rest()
+            let rest = match job {
+                Against::Flat(_) => {
+                    rp.rest_cells = model.rest_cells();
+                    model.rest()
+                }
+                Against::Mesh(j) => crate::sim::heights::mesh_rest(j, &model, 64).0,
+            };
+            let name = if several {
+                format!("{} T{} Ø{}", prog.name, tp.tool.number, tp.tool.diameter)
+            } else {
+                prog.name.clone()
+            };
+            let mut rep = Report {
+                input: name.clone(),
+                strategy: "read from G-code".into(),
+                tool_diameter_mm: tp.tool.diameter,
+                engagement_ref_deg: cutting.width.engagement_deg(),
+                levels: levels_of(tp).0,
+                sim_res_mm: model.grid.res,
+                ..Report::default()
+            };
+            crate::report::fill(&mut rep, tp, &rp, &rest, cutting.rapid_rate);
+            let mut v = ProgramView::with_lines(name, tp, lines.clone(), &prog.gcode, Some(&rp), &rep);
+            v.figures.retain(|(k, _)| k != "strategy" && k != "efficiency");
+            v.figures.insert(0, ("units read".into(), prog.units.to_string()));
+            views.push(v);
+            before += tp.moves.len();
+            base += rp.removed_volume;
+            if let Some(f) = &field {
+                end = Some(end_of(&model, f));
             }
-            Against::Mesh(j) => crate::sim::heights::mesh_rest(j, &model, 64).0,
-        };
-        let mut rep = Report {
-            input: name.clone(),
-            strategy: "read from G-code".into(),
-            tool_diameter_mm: tp.tool.diameter,
-            engagement_ref_deg: cutting.width.engagement_deg(),
-            levels: levels_of(tp).0,
-            sim_res_mm: model.grid.res,
-            ..Report::default()
-        };
-        crate::report::fill(&mut rep, tp, &rp, &rest, cutting.rapid_rate);
-        let mut v = ProgramView::of(name.clone(), tp, &gcode, Some(&rp), &rep);
-        v.lines = prog.lines.clone();
-        v.figures.retain(|(k, _)| k != "strategy" && k != "efficiency");
-        v.figures.insert(0, ("units read".into(), prog.units.to_string()));
-        let end = end_of(&model, &f);
-        if field.is_none() {
-            field = Some(f);
+            stock = Some(crate::sim::HeightMap { grid: model.grid, stock: model.heights().to_vec(), part: None });
         }
-        runs.push(Run { name, programs: vec![v], removal, end: Some(end) });
+        runs.push(Run { name: prog.name.clone(), programs: views, removal, end });
     }
     let solids = match job {
         Against::Flat(j) => fixtures_of(j),
