@@ -33,6 +33,18 @@ impl Grid {
         Grid { x0, y0, res, nx, ny }
     }
 
+    /// The values of `v` (over this grid) at the cells of `to` (cells of one size aligned
+    /// alike, or the centres of blocks of them), `none` where this grid has no cell.
+    pub fn resample(&self, v: &[f32], to: &Grid, none: f32) -> Vec<f32> {
+        let mut out = Vec::with_capacity(to.len());
+        for j in 0..to.ny {
+            for i in 0..to.nx {
+                out.push(self.cell_of(to.center(i, j)).map_or(none, |(a, b)| v[b * self.nx + a]));
+            }
+        }
+        out
+    }
+
     /// Number of cells.
     pub fn len(&self) -> usize {
         self.nx * self.ny
@@ -142,6 +154,21 @@ pub fn floor_i(x: f64) -> i64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn resample_reads_the_cells_two_grids_share() {
+        let lo = DVec2::ZERO;
+        let frame = Grid::covering(lo, DVec2::new(4.0, 3.0), 0.0, 1.0, lo);
+        let inner = Grid::covering(DVec2::new(1.0, 1.0), DVec2::new(3.0, 2.0), 0.0, 1.0, lo);
+        assert_eq!((inner.nx, inner.ny), (2, 1));
+        let v: Vec<f32> = (0..inner.len()).map(|k| k as f32 + 1.0).collect();
+        let got = inner.resample(&v, &frame, -1.0);
+        let mut want = vec![-1.0; frame.len()];
+        want[frame.nx + 1] = 1.0;
+        want[frame.nx + 2] = 2.0;
+        assert_eq!(got, want);
+        assert_eq!(frame.resample(&got, &inner, 0.0), v);
+    }
 
     #[test]
     fn fill_counts_cell_centres() {

@@ -32,6 +32,7 @@ use crate::geom::{Area, DVec2, DVec3};
 use crate::job::rough::RoughResult;
 use crate::model::{Job, MeshJob};
 use crate::report::Report;
+use crate::sim::grid::Grid;
 use crate::sim::raster::RasterSim;
 use crate::sim::{Event, Replay, Sample, SampleKind, SimOptions};
 use crate::toolpath::{Motion, MoveKind, Toolpath, move_length};
@@ -220,43 +221,30 @@ pub fn lines_of(gcode: &str, tp: &Toolpath) -> Vec<u32> {
 fn field_of(model: &RasterSim, bottom: f64) -> Field {
     let g = model.grid;
     let f = ((g.nx * g.ny) as f64 / MAX_FIELD_CELLS as f64).sqrt().ceil().max(1.0) as usize;
-    let (nx, ny) = (g.nx.div_ceil(f), g.ny.div_ceil(f));
-    let finite = |v: f32| if v.is_finite() { v } else { f32::NAN };
-    let start = blocks(&g, model.initial_heights(), f, nx, ny).map(finite).collect();
-    let part = blocks(&g, model.part_heights(), f, nx, ny).map(finite).collect();
-    Field { x0: g.x0, y0: g.y0, res: g.res * f as f64, nx, ny, start, part, bottom }
-}
-
-/// The values of `v` (over `g`) at the centres of blocks of `f` × `f` cells.
-fn blocks<'a>(
-    g: &crate::sim::grid::Grid,
-    v: &'a [f32],
-    f: usize,
-    nx: usize,
-    ny: usize,
-) -> impl Iterator<Item = f32> + 'a {
-    let (gnx, gny) = (g.nx, g.ny);
-    (0..ny).flat_map(move |j| {
-        (0..nx).map(move |i| {
-            let (a, b) = ((i * f + f / 2).min(gnx - 1), (j * f + f / 2).min(gny - 1));
-            v[b * gnx + a]
-        })
-    })
-}
-
-/// The heights of `model` on the cells of `field` (its grid cut into blocks of `f` at the same
-/// corner), NaN where there is no stock.
-fn end_of(model: &RasterSim, field: &Field) -> Vec<f32> {
-    let g = model.grid;
-    let mut out = Vec::with_capacity(field.nx * field.ny);
-    for j in 0..field.ny {
-        for i in 0..field.nx {
-            let c = DVec2::new(field.x0 + (i as f64 + 0.5) * field.res, field.y0 + (j as f64 + 0.5) * field.res);
-            let v = g.cell_of(c).map_or(f32::NAN, |(a, b)| model.heights()[b * g.nx + a]);
-            out.push(if v.is_finite() { v } else { f32::NAN });
-        }
+    let blocks = Grid { res: g.res * f as f64, nx: g.nx.div_ceil(f), ny: g.ny.div_ceil(f), ..g };
+    Field {
+        x0: blocks.x0,
+        y0: blocks.y0,
+        res: blocks.res,
+        nx: blocks.nx,
+        ny: blocks.ny,
+        start: on(&g, model.initial_heights(), &blocks),
+        part: on(&g, model.part_heights(), &blocks),
+        bottom,
     }
-    out
+}
+
+/// The values of `v` (over `g`) at the cells of `to`, NaN where there is none (outside `g`, or
+/// no stock).
+fn on(g: &Grid, v: &[f32], to: &Grid) -> Vec<f32> {
+    g.resample(v, to, f32::NAN).into_iter().map(|v| if v.is_finite() { v } else { f32::NAN }).collect()
+}
+
+impl Field {
+    /// The field's cells as a grid.
+    pub fn grid(&self) -> Grid {
+        Grid { x0: self.x0, y0: self.y0, res: self.res, nx: self.nx, ny: self.ny }
+    }
 }
 
 /// The move counts after which the removed volume is read: `REMOVAL_STEPS` + 1 of them, from
@@ -395,7 +383,7 @@ pub fn of_rough(job: &Job, res: &RoughResult, sim: &SimOptions) -> Result<Scene>
     let field = field_of(&model, job.floor);
     let marks = removal_marks(res.toolpath.moves.len());
     let removal = cut_reading(&mut model, &res.toolpath, &marks, 0, 0.0);
-    let end = end_of(&model, &field);
+    let end = on(&model.grid, model.heights(), &field.grid());
     let program =
         ProgramView::of(res.report.input.clone(), &res.toolpath, &res.gcode, res.replay.as_ref(), &res.report);
     Ok(Scene {
@@ -432,7 +420,7 @@ pub fn of_mesh_rough(job: &MeshJob, res: &RoughResult, sim: &SimOptions) -> Resu
     let field = field_of(&model, job.floor);
     let marks = removal_marks(res.toolpath.moves.len());
     let removal = cut_reading(&mut model, &res.toolpath, &marks, 0, 0.0);
-    let end = end_of(&model, &field);
+    let end = on(&model.grid, model.heights(), &field.grid());
     let program =
         ProgramView::of(res.report.input.clone(), &res.toolpath, &res.gcode, res.replay.as_ref(), &res.report);
     Ok(Scene {
@@ -499,7 +487,7 @@ pub fn of_plan(
         before += tp.moves.len();
         base += rp.removed_volume;
         if let Some(f) = &field {
-            end = Some(end_of(&model, f));
+            end = Some(on(&model.grid, model.heights(), &f.grid()));
         }
         stock = Some(crate::sim::HeightMap { grid: model.grid, stock: model.heights().to_vec(), part: None });
     }
@@ -618,7 +606,7 @@ pub fn of_programs(job: Against<'_>, programs: Vec<ReadProgram>, sim: &SimOption
             before += tp.moves.len();
             base += rp.removed_volume;
             if let Some(f) = &field {
-                end = Some(end_of(&model, f));
+                end = Some(on(&model.grid, model.heights(), &f.grid()));
             }
             stock = Some(crate::sim::HeightMap { grid: model.grid, stock: model.heights().to_vec(), part: None });
         }

@@ -144,7 +144,7 @@ pub(super) fn replay(job: &MeshJob, programs: &mut [Program], sim: &SimOptions, 
             let low = heights::mesh_reach(job, &model.grid, last_r);
             (model.grid, low)
         });
-        let low = resample(&low.0, &low.1, &model.grid, f32::INFINITY);
+        let low = low.0.resample(&low.1, &model.grid, f32::INFINITY);
         let rest = heights::rest_above(job, &model, &low, &low, &job.levels());
         let mut rep = Report::default();
         crate::report::fill(&mut rep, &p.toolpath, &rp, &rest, rapid_rate);
@@ -179,25 +179,13 @@ pub(super) fn replay(job: &MeshJob, programs: &mut [Program], sim: &SimOptions, 
             check.simulate_s
         );
         p.check = Some(check);
-        maps.after.push(resample(&model.grid, model.heights(), &frame, f32::NEG_INFINITY));
+        maps.after.push(model.grid.resample(model.heights(), &frame, f32::NEG_INFINITY));
         stock = Some(HeightMap { grid: model.grid, stock: model.heights().to_vec(), part: None });
     }
     if let Some((grid, low)) = &reach {
-        maps.low = resample(grid, low, &frame, f32::INFINITY);
+        maps.low = grid.resample(low, &frame, f32::INFINITY);
     }
     Ok(maps)
-}
-
-/// The values of `v` (on `grid`) at the cells of `to` (cells of one size aligned alike), `none`
-/// where `grid` has no cell.
-fn resample(grid: &Grid, v: &[f32], to: &Grid, none: f32) -> Vec<f32> {
-    let mut out = Vec::with_capacity(to.len());
-    for j in 0..to.ny {
-        for i in 0..to.nx {
-            out.push(grid.cell_of(to.center(i, j)).map_or(none, |(a, b)| v[b * grid.nx + a]));
-        }
-    }
-    out
 }
 
 #[cfg(test)]
@@ -266,20 +254,5 @@ mod tests {
         let c = alone[0].check.as_ref().expect("a check");
         assert_eq!(c.rapid_collisions, 1);
         assert!((c.rapid_collision_max_mm - 5.5).abs() < 1e-9, "{}", c.rapid_collision_max_mm);
-    }
-
-    #[test]
-    fn resample_reads_the_cells_two_grids_share() {
-        let lo = DVec2::ZERO;
-        let frame = Grid::covering(lo, DVec2::new(4.0, 3.0), 0.0, 1.0, lo);
-        let inner = Grid::covering(DVec2::new(1.0, 1.0), DVec2::new(3.0, 2.0), 0.0, 1.0, lo);
-        assert_eq!((inner.nx, inner.ny), (2, 1));
-        let v: Vec<f32> = (0..inner.len()).map(|k| k as f32 + 1.0).collect();
-        let got = resample(&inner, &v, &frame, -1.0);
-        let mut want = vec![-1.0; frame.len()];
-        want[frame.nx + 1] = 1.0;
-        want[frame.nx + 2] = 2.0;
-        assert_eq!(got, want);
-        assert_eq!(resample(&frame, &got, &inner, 0.0), v);
     }
 }
