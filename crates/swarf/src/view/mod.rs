@@ -255,29 +255,47 @@ fn removal_marks(n: usize) -> Vec<usize> {
     v
 }
 
-/// Cuts `tp` on `model` (no measurements), reading the removed volume at the run's marks that
-/// fall in it; `before` moves of the run come before `tp`, and `base` mm³ were removed by them.
-fn cut_reading(model: &mut RasterSim, tp: &Toolpath, marks: &[usize], before: usize, base: f64) -> Vec<(u32, f64)> {
+/// Goes through `tp` on `model` in pieces that end at the run's marks falling in it (`before`
+/// moves of the run come before `tp`, and `base` mm³ were removed by them), `piece` doing the
+/// work of each (given the index of its first move and its moves as a toolpath), and reads the
+/// removed volume at each mark.
+fn by_marks(
+    model: &mut RasterSim,
+    tp: &Toolpath,
+    marks: &[usize],
+    before: usize,
+    base: f64,
+    mut piece: impl FnMut(&mut RasterSim, usize, &Toolpath),
+) -> Vec<(u32, f64)> {
+    let n = tp.moves.len();
     let mut out = Vec::new();
-    let mut done = 0;
-    let mut at = tp.start;
-    for &m in marks.iter().filter(|&&m| m >= before && m <= before + tp.moves.len()) {
-        let upto = m - before;
+    let (mut done, mut at) = (0usize, tp.start);
+    let mut ends: Vec<usize> = marks.iter().filter(|&&m| m >= before && m <= before + n).map(|&m| m - before).collect();
+    if ends.last() != Some(&n) {
+        ends.push(n);
+    }
+    for upto in ends {
         if upto > done {
-            model.cut_moves(at, &tp.moves[done..upto]);
-            at = tp.moves[upto - 1].to;
+            let part = Toolpath {
+                tool: tp.tool.clone(),
+                start: at,
+                clearance_z: tp.clearance_z,
+                moves: tp.moves[done..upto].to_vec(),
+                notes: Vec::new(),
+            };
+            piece(model, done, &part);
+            at = part.end();
             done = upto;
         }
-        out.push((m as u32, base + model.removed_volume()));
-    }
-    if done < tp.moves.len() {
-        model.cut_moves(at, &tp.moves[done..]);
+        if marks.contains(&(before + upto)) {
+            out.push(((before + upto) as u32, base + model.removed_volume()));
+        }
     }
     out
 }
 
-/// Replays `tp` on `model` in pieces, reading the removed volume at the run's marks in it
-/// (as [`cut_reading`]); the samples and events come back as one replay of the whole program
+/// Replays `tp` on `model`, reading the removed volume at the run's marks in it (as
+/// [`by_marks`]); the samples and events come back as one replay of the whole program
 /// (lengths and move indices from its start).
 fn replay_reading(
     model: &mut RasterSim,
@@ -287,39 +305,16 @@ fn replay_reading(
     base: f64,
 ) -> (Replay, Vec<(u32, f64)>) {
     let mut all = Replay::default();
-    let mut out = Vec::new();
-    let mut done = 0usize;
     let mut s_off = 0.0;
-    let mut at = tp.start;
-    let mut cuts: Vec<usize> =
-        marks.iter().filter(|&&m| m >= before && m <= before + tp.moves.len()).map(|&m| m - before).collect();
-    if cuts.last() != Some(&tp.moves.len()) {
-        cuts.push(tp.moves.len());
-    }
-    for upto in cuts {
-        if upto > done {
-            let part = Toolpath {
-                tool: tp.tool.clone(),
-                start: at,
-                clearance_z: tp.clearance_z,
-                moves: tp.moves[done..upto].to_vec(),
-                notes: Vec::new(),
-            };
-            let rp = model.replay(&part, &mut |_| {});
-            all.samples.extend(rp.samples.iter().map(|s| Sample { s: s.s + s_off, mi: s.mi + done as u32, ..*s }));
-            let shift =
-                |v: &[Event]| v.iter().map(|e| Event { move_index: e.move_index + done, ..*e }).collect::<Vec<_>>();
-            all.gouges.extend(shift(&rp.gouges));
-            all.plunges.extend(shift(&rp.plunges));
-            all.rapid_collisions.extend(shift(&rp.rapid_collisions));
-            s_off += part.segments().filter(|(_, m)| !m.is_rapid()).map(|(a, m)| move_length(a, m)).sum::<f64>();
-            at = part.end();
-            done = upto;
-        }
-        if marks.contains(&(before + upto)) {
-            out.push(((before + upto) as u32, base + model.removed_volume()));
-        }
-    }
+    let out = by_marks(model, tp, marks, before, base, |model, done, part| {
+        let rp = model.replay(part, &mut |_| {});
+        all.samples.extend(rp.samples.iter().map(|s| Sample { s: s.s + s_off, mi: s.mi + done as u32, ..*s }));
+        let shift = |v: &[Event]| v.iter().map(|e| Event { move_index: e.move_index + done, ..*e }).collect::<Vec<_>>();
+        all.gouges.extend(shift(&rp.gouges));
+        all.plunges.extend(shift(&rp.plunges));
+        all.rapid_collisions.extend(shift(&rp.rapid_collisions));
+        s_off += part.segments().filter(|(_, m)| !m.is_rapid()).map(|(a, m)| move_length(a, m)).sum::<f64>();
+    });
     all.removed_volume = model.removed_volume();
     all.res = model.grid.res;
     (all, out)
@@ -378,21 +373,38 @@ pub fn of_rough(job: &Job, res: &RoughResult, sim: &SimOptions) -> Result<Scene>
     let sim =
         proof_cells(sim, &res.report).unwrap_or_else(|| fitted(sim, job.cutting.tool.diameter, job.stock.bounds()));
     let regions = job.regions(job.radius(), 0.0)?;
-    let mut model = RasterSim::new(job, &regions, &sim)?;
+    Ok(proven(RasterSim::new(job, &regions, &sim)?, job.floor, res, fixtures_of(job)))
+}
+
+/// The page of a 3D job's program (`swarf rough` on an STL part): the part's triangles, the
+/// stock field of the mesh model.
+pub fn of_mesh_rough(job: &MeshJob, res: &RoughResult, sim: &SimOptions) -> Result<Scene> {
+    let sim = proof_cells(sim, &res.report).unwrap_or_else(|| {
+        fitted(sim, job.cutting.tool.diameter, Some((job.stock_lo.truncate(), job.stock_hi.truncate())))
+    });
+    let solids = vec![Solid::Mesh { kind: "part", tris: job.mesh.tris.clone() }];
+    Ok(proven(crate::sim::heights::mesh_model(job, &sim)?, job.floor, res, solids))
+}
+
+/// The page of a program `rough` planned and proved (`res`): the stock field from `model`, a
+/// fresh model of its job, on which the program is cut again to read the removed volume along
+/// it (its engagement and events are the proof's).
+fn proven(mut model: RasterSim, floor: f64, res: &RoughResult, solids: Vec<Solid>) -> Scene {
     model.track_exact = false;
-    let field = field_of(&model, job.floor);
+    let field = field_of(&model, floor);
     let marks = removal_marks(res.toolpath.moves.len());
-    let removal = cut_reading(&mut model, &res.toolpath, &marks, 0, 0.0);
+    let removal =
+        by_marks(&mut model, &res.toolpath, &marks, 0, 0.0, |model, _, part| model.cut_moves(part.start, &part.moves));
     let end = on(&model.grid, model.heights(), &field.grid());
     let program =
         ProgramView::of(res.report.input.clone(), &res.toolpath, &res.gcode, res.replay.as_ref(), &res.report);
-    Ok(Scene {
+    Scene {
         title: format!("{} — {}", res.report.input, res.report.strategy),
         runs: vec![Run { name: res.report.input.clone(), programs: vec![program], removal, end: Some(end) }],
         field: Some(field),
-        solids: fixtures_of(job),
+        solids,
         notes: Vec::new(),
-    })
+    }
 }
 
 /// A 2.5D job's fixtures, as their outlines standing from the floor to a quarter of the job's
@@ -409,32 +421,9 @@ fn fixtures_of(job: &Job) -> Vec<Solid> {
     }]
 }
 
-/// The page of a 3D job's program (`swarf rough` on an STL part): the part's triangles, the
-/// stock field of the mesh model.
-pub fn of_mesh_rough(job: &MeshJob, res: &RoughResult, sim: &SimOptions) -> Result<Scene> {
-    let sim = proof_cells(sim, &res.report).unwrap_or_else(|| {
-        fitted(sim, job.cutting.tool.diameter, Some((job.stock_lo.truncate(), job.stock_hi.truncate())))
-    });
-    let mut model = crate::sim::heights::mesh_model(job, &sim)?;
-    model.track_exact = false;
-    let field = field_of(&model, job.floor);
-    let marks = removal_marks(res.toolpath.moves.len());
-    let removal = cut_reading(&mut model, &res.toolpath, &marks, 0, 0.0);
-    let end = on(&model.grid, model.heights(), &field.grid());
-    let program =
-        ProgramView::of(res.report.input.clone(), &res.toolpath, &res.gcode, res.replay.as_ref(), &res.report);
-    Ok(Scene {
-        title: format!("{} — {}", res.report.input, res.report.strategy),
-        runs: vec![Run { name: res.report.input.clone(), programs: vec![program], removal, end: Some(end) }],
-        field: Some(field),
-        solids: vec![Solid::Mesh { kind: "part", tris: job.mesh.tris.clone() }],
-        notes: Vec::new(),
-    })
-}
-
 /// The page of a tool sequence (`swarf plan`): one run of its programs, each replayed on what
-/// the ones before it left (as the plan's own check does), a tool per colour. `programs` are
-/// the plan's programs with their G-code; `reports` their figures.
+/// the ones before it left (as the plan's own check does, on the cells of its smallest tool),
+/// a tool per colour. `programs` are the plan's programs with their names and G-code.
 pub fn of_plan(
     job: &MeshJob,
     programs: &[(&Toolpath, String, String)],
@@ -443,57 +432,20 @@ pub fn of_plan(
 ) -> Result<Scene> {
     let smallest = programs.iter().map(|p| p.0.tool.diameter).fold(f64::INFINITY, f64::min);
     let sim = SimOptions { res: Some(sim.res_for(smallest)), ..sim.clone() };
-    let total: usize = programs.iter().map(|p| p.0.moves.len()).sum();
-    // (and where each program ends: the stock each tool leaves is read exactly)
-    let mut marks = removal_marks(total);
-    marks.extend(programs.iter().scan(0, |n, p| {
-        *n += p.0.moves.len();
-        Some(*n)
-    }));
-    marks.sort_unstable();
-    marks.dedup();
-    let mut removal = Vec::new();
-    let mut field: Option<Field> = None;
-    let mut views = Vec::new();
-    let mut stock: Option<crate::sim::HeightMap> = None;
-    let (mut before, mut base) = (0usize, 0.0);
-    let mut end = None;
-    for (tp, name, gcode) in programs {
-        let mut model = crate::sim::heights::mesh_model_after(job, &tp.tool, stock.as_ref(), &sim)?;
-        model.track_exact = false;
-        if field.is_none() {
-            field = Some(field_of(&model, job.floor));
-        }
-        let (mut rp, got) = replay_reading(&mut model, tp, &marks, before, base);
-        // (the sequence's models keep no cuts for the exact engagement: the chart reads the
-        // circumference pixels, paper 1 eq. 4)
-        for s in &mut rp.samples {
-            s.tea = s.tea_pixel;
-        }
-        removal.extend(got);
-        let rest = crate::sim::heights::mesh_rest(job, &model, 64).0;
-        let mut rep = Report {
-            tool_diameter_mm: tp.tool.diameter,
-            strategy: "z-level roughing".into(),
-            levels: levels_of(tp).0,
-            ..Report::default()
-        };
-        rep.engagement_ref_deg = 0.0;
-        rep.sim_res_mm = model.grid.res;
-        crate::report::fill(&mut rep, tp, &rp, &rest, job.cutting.rapid_rate);
-        let mut v = ProgramView::of(name.clone(), tp, gcode, Some(&rp), &rep);
-        v.figures.retain(|(k, _)| k != "strategy" && k != "efficiency");
-        views.push(v);
-        before += tp.moves.len();
-        base += rp.removed_volume;
-        if let Some(f) = &field {
-            end = Some(on(&model.grid, model.heights(), &f.grid()));
-        }
-        stock = Some(crate::sim::HeightMap { grid: model.grid, stock: model.heights().to_vec(), part: None });
-    }
+    let pieces: Vec<Piece<'_>> =
+        programs.iter().map(|(tp, name, gcode)| Piece { tp, name: name.clone(), gcode, lines: None }).collect();
+    let mut field = None;
+    let how = Chain {
+        job: Against::Mesh(job),
+        sim: &|_| sim.clone(),
+        exact_first: false,
+        strategy: "z-level roughing",
+        ref_deg: 0.0,
+    };
+    let run = how.run("tool sequence".into(), &pieces, &mut field)?;
     Ok(Scene {
         title: title.into(),
-        runs: vec![Run { name: "tool sequence".into(), programs: views, removal, end }],
+        runs: vec![run],
         field,
         solids: vec![Solid::Mesh { kind: "part", tris: job.mesh.tris.clone() }],
         notes: vec!["engagement by circumference pixels (paper 1 eq. 4)".into()],
@@ -507,6 +459,142 @@ pub enum Against<'a> {
     Flat(&'a Job),
     /// A mesh job.
     Mesh(&'a MeshJob),
+}
+
+impl Against<'_> {
+    /// A model of the job for `tool` on `sim`'s cells, its stock what `after` left (the job's
+    /// stock without it).
+    fn model(
+        &self,
+        tool: &crate::model::Tool,
+        after: Option<crate::sim::HeightMap>,
+        sim: &SimOptions,
+    ) -> Result<RasterSim> {
+        match *self {
+            Against::Flat(j) => {
+                let mut j2 = j.clone();
+                j2.cutting.tool = tool.clone();
+                let sim = SimOptions { heights: after.map(std::sync::Arc::new), ..sim.clone() };
+                let regions = j2.regions(j2.radius(), 0.0)?;
+                RasterSim::new(&j2, &regions, &sim)
+            }
+            Against::Mesh(j) => crate::sim::heights::mesh_model_after(j, tool, after.as_ref(), sim),
+        }
+    }
+
+    /// The rest material `model` holds after `rp` (whose rest cells it fills in 2.5D).
+    fn rest(&self, model: &RasterSim, rp: &mut Replay) -> crate::sim::Rest {
+        match *self {
+            Against::Flat(_) => {
+                rp.rest_cells = model.rest_cells();
+                model.rest()
+            }
+            Against::Mesh(j) => crate::sim::heights::mesh_rest(j, model, 64).0,
+        }
+    }
+
+    fn floor(&self) -> f64 {
+        match *self {
+            Against::Flat(j) => j.floor,
+            Against::Mesh(j) => j.floor,
+        }
+    }
+
+    fn cutting(&self) -> &crate::model::Cutting {
+        match *self {
+            Against::Flat(j) => &j.cutting,
+            Against::Mesh(j) => &j.cutting,
+        }
+    }
+
+    fn name(&self) -> &str {
+        match *self {
+            Against::Flat(j) => &j.name,
+            Against::Mesh(j) => &j.name,
+        }
+    }
+}
+
+/// One program of a run, as [`Chain::run`] takes it: its moves (with their tool), its name, its
+/// G-code and the source line of each move (`None`: read back from the G-code).
+struct Piece<'a> {
+    tp: &'a Toolpath,
+    name: String,
+    gcode: &'a str,
+    lines: Option<Vec<u32>>,
+}
+
+/// How a run of programs on one stock is replayed: a tool sequence, or a program that changes
+/// tools.
+struct Chain<'a> {
+    job: Against<'a>,
+    /// The simulation options for a tool.
+    sim: &'a dyn Fn(&crate::model::Tool) -> SimOptions,
+    /// The first program's engagement is measured exactly; later programs', and every
+    /// program's without it, by circumference pixels (paper 1 eq. 4): the exact model starts
+    /// from the stock outline, not from what the programs before left.
+    exact_first: bool,
+    /// What the reports call the strategy.
+    strategy: &'a str,
+    /// The reference engagement, degrees (0: none).
+    ref_deg: f64,
+}
+
+impl Chain<'_> {
+    /// Replays `pieces` one after the other on one stock, each on what the ones before it left,
+    /// as the run `name`: the programs' views, the removed volume read after every 64th of their
+    /// moves and where each ends, and the heights after the last on `field` (made from the first
+    /// model when there is none).
+    fn run(&self, name: String, pieces: &[Piece<'_>], field: &mut Option<Field>) -> Result<Run> {
+        let total: usize = pieces.iter().map(|p| p.tp.moves.len()).sum();
+        // (and where each program ends: the stock each tool leaves is read exactly)
+        let mut marks = removal_marks(total);
+        marks.extend(pieces.iter().scan(0, |n, p| {
+            *n += p.tp.moves.len();
+            Some(*n)
+        }));
+        marks.sort_unstable();
+        marks.dedup();
+        let (mut before, mut base) = (0usize, 0.0);
+        let mut stock: Option<crate::sim::HeightMap> = None;
+        let (mut views, mut removal) = (Vec::new(), Vec::new());
+        for (k, piece) in pieces.iter().enumerate() {
+            let tp = piece.tp;
+            let exact = self.exact_first && k == 0;
+            let mut model = self.job.model(&tp.tool, stock.take(), &(self.sim)(&tp.tool))?;
+            model.track_exact = exact;
+            if field.is_none() {
+                *field = Some(field_of(&model, self.job.floor()));
+            }
+            let (mut rp, got) = replay_reading(&mut model, tp, &marks, before, base);
+            removal.extend(got);
+            if !exact {
+                for s in &mut rp.samples {
+                    s.tea = s.tea_pixel;
+                }
+            }
+            let rest = self.job.rest(&model, &mut rp);
+            let mut rep = Report {
+                input: piece.name.clone(),
+                strategy: self.strategy.into(),
+                tool_diameter_mm: tp.tool.diameter,
+                engagement_ref_deg: self.ref_deg,
+                levels: levels_of(tp).0,
+                sim_res_mm: model.grid.res,
+                ..Report::default()
+            };
+            crate::report::fill(&mut rep, tp, &rp, &rest, self.job.cutting().rapid_rate);
+            let lines = piece.lines.clone().unwrap_or_else(|| lines_of(piece.gcode, tp));
+            let mut v = ProgramView::with_lines(piece.name.clone(), tp, lines, piece.gcode, Some(&rp), &rep);
+            v.figures.retain(|(k, _)| k != "strategy" && k != "efficiency");
+            views.push(v);
+            before += tp.moves.len();
+            base += rp.removed_volume;
+            stock = Some(crate::sim::HeightMap { grid: model.grid, stock: model.heights().to_vec(), part: None });
+        }
+        let end = stock.zip(field.as_ref()).map(|(s, f)| on(&s.grid, &s.stock, &f.grid()));
+        Ok(Run { name, programs: views, removal, end })
+    }
 }
 
 /// A program read from G-code, as [`of_programs`] takes it.
@@ -528,96 +616,48 @@ pub struct ReadProgram {
 /// program that changes tools is a run of one piece per tool, each replayed on what the ones
 /// before it left, as a tool sequence is.
 pub fn of_programs(job: Against<'_>, programs: Vec<ReadProgram>, sim: &SimOptions) -> Result<Scene> {
+    let span = match job {
+        Against::Flat(j) => j.stock.bounds(),
+        Against::Mesh(j) => Some((j.stock_lo.truncate(), j.stock_hi.truncate())),
+    };
+    let sim_for = |t: &crate::model::Tool| fitted(sim, t.diameter, span);
+    let how = Chain {
+        job,
+        sim: &sim_for,
+        exact_first: true,
+        strategy: "read from G-code",
+        ref_deg: job.cutting().width.engagement_deg(),
+    };
     let mut runs = Vec::new();
     let mut field = None;
-    let (name_of_job, cutting, floor) = match job {
-        Against::Flat(j) => (j.name.clone(), j.cutting.clone(), j.floor),
-        Against::Mesh(j) => (j.name.clone(), j.cutting.clone(), j.floor),
-    };
-    for prog in programs {
-        let total: usize = prog.pieces.iter().map(|p| p.0.moves.len()).sum();
-        let mut marks = removal_marks(total);
-        marks.extend(prog.pieces.iter().scan(0, |n, p| {
-            *n += p.0.moves.len();
-            Some(*n)
-        }));
-        marks.sort_unstable();
-        marks.dedup();
-        let (mut before, mut base) = (0usize, 0.0);
-        let mut stock: Option<crate::sim::HeightMap> = None;
-        let (mut views, mut removal, mut end) = (Vec::new(), Vec::new(), None);
+    for prog in &programs {
         let several = prog.pieces.len() > 1;
-        for (tp, lines) in &prog.pieces {
-            let mut model = match job {
-                Against::Flat(j) => {
-                    let mut j2 = j.clone();
-                    j2.cutting.tool = tp.tool.clone();
-                    let sim = SimOptions {
-                        heights: stock.take().map(std::sync::Arc::new),
-                        ..fitted(sim, tp.tool.diameter, j.stock.bounds())
-                    };
-                    let regions = j2.regions(j2.radius(), 0.0)?;
-                    RasterSim::new(&j2, &regions, &sim)?
-                }
-                Against::Mesh(j) => {
-                    let sim = fitted(sim, tp.tool.diameter, Some((j.stock_lo.truncate(), j.stock_hi.truncate())));
-                    crate::sim::heights::mesh_model_after(j, &tp.tool, stock.as_ref(), &sim)?
-                }
-            };
-            if field.is_none() {
-                field = Some(field_of(&model, floor));
-            }
-            let (mut rp, got) = replay_reading(&mut model, tp, &marks, before, base);
-            removal.extend(got);
-            if before > 0 {
-                // (the exact measure starts from the stock outline, not from what the tools
-                // before left: a later tool's engagement is read by circumference pixels,
-                // paper 1 eq. 4, as a tool sequence's)
-                for s in &mut rp.samples {
-                    s.tea = s.tea_pixel;
-                }
-            }
-            let rest = match job {
-                Against::Flat(_) => {
-                    rp.rest_cells = model.rest_cells();
-                    model.rest()
-                }
-                Against::Mesh(j) => crate::sim::heights::mesh_rest(j, &model, 64).0,
-            };
-            let name = if several {
-                format!("{} T{} Ø{}", prog.name, tp.tool.number, tp.tool.diameter)
-            } else {
-                prog.name.clone()
-            };
-            let mut rep = Report {
-                input: name.clone(),
-                strategy: "read from G-code".into(),
-                tool_diameter_mm: tp.tool.diameter,
-                engagement_ref_deg: cutting.width.engagement_deg(),
-                levels: levels_of(tp).0,
-                sim_res_mm: model.grid.res,
-                ..Report::default()
-            };
-            crate::report::fill(&mut rep, tp, &rp, &rest, cutting.rapid_rate);
-            let mut v = ProgramView::with_lines(name, tp, lines.clone(), &prog.gcode, Some(&rp), &rep);
-            v.figures.retain(|(k, _)| k != "strategy" && k != "efficiency");
+        let pieces: Vec<Piece<'_>> = prog
+            .pieces
+            .iter()
+            .map(|(tp, lines)| Piece {
+                tp,
+                name: if several {
+                    format!("{} T{} Ø{}", prog.name, tp.tool.number, tp.tool.diameter)
+                } else {
+                    prog.name.clone()
+                },
+                gcode: &prog.gcode,
+                lines: Some(lines.clone()),
+            })
+            .collect();
+        let mut run = how.run(prog.name.clone(), &pieces, &mut field)?;
+        for v in &mut run.programs {
             v.figures.insert(0, ("units read".into(), prog.units.to_string()));
-            views.push(v);
-            before += tp.moves.len();
-            base += rp.removed_volume;
-            if let Some(f) = &field {
-                end = Some(on(&model.grid, model.heights(), &f.grid()));
-            }
-            stock = Some(crate::sim::HeightMap { grid: model.grid, stock: model.heights().to_vec(), part: None });
         }
-        runs.push(Run { name: prog.name.clone(), programs: views, removal, end });
+        runs.push(run);
     }
     let solids = match job {
         Against::Flat(j) => fixtures_of(j),
         Against::Mesh(j) => vec![Solid::Mesh { kind: "part", tris: j.mesh.tris.clone() }],
     };
     let names: Vec<&str> = runs.iter().map(|r| r.name.as_str()).collect();
-    Ok(Scene { title: format!("{} — {}", name_of_job, names.join(" vs ")), runs, field, solids, notes: Vec::new() })
+    Ok(Scene { title: format!("{} — {}", job.name(), names.join(" vs ")), runs, field, solids, notes: Vec::new() })
 }
 
 /// The page of a 5-axis program (`swarf five`): the tool tip's path with the tool axis at each
