@@ -677,6 +677,20 @@ impl<'a> Reader<'a> {
         }
     }
 
+    /// The count word `letter` of `w` (an arc's `P` turns, a cycle's `L` repeats): 1 when absent,
+    /// else a whole number from 1 to [`MAX_REPEAT`].
+    fn count(&self, line: u32, w: &Words, letter: char, what: &str) -> Result<f64> {
+        match w.get(letter) {
+            None => Ok(1.0),
+            Some(c) if c.value >= 1.0 && c.value.fract() == 0.0 && c.value <= MAX_REPEAT => Ok(c.value),
+            Some(c) => self.err(
+                line,
+                c.col,
+                format!("{letter}{}: the {what} are a whole number from 1 to {MAX_REPEAT}", c.value),
+            ),
+        }
+    }
+
     /// The offset of axis `a` of the work coordinate system in use, mm.
     fn offset(&self, a: usize) -> f64 {
         self.offsets.get(self.current).map_or(0.0, |o| o[a])
@@ -848,17 +862,7 @@ impl<'a> Reader<'a> {
             return self.err(line, col, "an arc from an unknown point: give X and Y before it");
         };
         let (s, e) = (DVec2::new(sx, sy), DVec2::new(ex, ey));
-        let turns = match w.get('P') {
-            None => 1.0,
-            Some(p) if p.value >= 1.0 && p.value.fract() == 0.0 && p.value <= MAX_REPEAT => p.value,
-            Some(p) => {
-                return self.err(
-                    line,
-                    p.col,
-                    format!("P{}: the turns of an arc are a whole number from 1 to {MAX_REPEAT}", p.value),
-                );
-            }
-        };
+        let turns = self.count(line, w, 'P', "turns of an arc")?;
         let u = self.unit();
         let center = if let Some(rw) = w.get('R') {
             if let Some(ij) = w.get('I').or(w.get('J')) {
@@ -979,17 +983,7 @@ impl<'a> Reader<'a> {
         let (Some(rw), Some(zw)) = (self.cycle_r, self.cycle_z) else {
             return self.err(line, col, format!("{name} needs R (its retract plane) and Z (its bottom)"));
         };
-        let reps = match w.get('L') {
-            None => 1.0,
-            Some(l) if l.value >= 1.0 && l.value.fract() == 0.0 && l.value <= MAX_REPEAT => l.value,
-            Some(l) => {
-                return self.err(
-                    line,
-                    l.col,
-                    format!("L{}: the repeats of a cycle are a whole number from 1 to {MAX_REPEAT}", l.value),
-                );
-            }
-        } as usize;
+        let reps = self.count(line, w, 'L', "repeats of a cycle")? as usize;
         let old_z = self.pos[2];
         let (r, bottom) = if self.absolute {
             (rw + self.offset(2), zw + self.offset(2))
@@ -1495,6 +1489,16 @@ mod tests {
             ("G0 X0 Y0 Z0\nG41 D1", "line 2, column 1", "cutter radius compensation"),
             ("G0 X0 Y0 Z0\nG92 X0", "line 2, column 1", "offsets set by the program"),
             ("G0 X0 Y0 Z0\nG10 L2 P7 X1", "line 2, column 1", "P1 to P6"),
+            (
+                "G0 X0 Y0 Z0\nG2 X0 Y0 I5 J0 P0.5 F100",
+                "line 2, column 16",
+                "P0.5: the turns of an arc are a whole number",
+            ),
+            (
+                "G0 X0 Y0 Z5\nG81 X1 Y1 Z-1 R2 L0 F100",
+                "line 2, column 18",
+                "L0: the repeats of a cycle are a whole number",
+            ),
             ("G10 L20 P1 X1", "line 1, column 12", "does not state"),
             ("G0 X0 Y0 Z0\nG10 L1 P1 Z1", "line 2, column 1", "offsets set by the program"),
             ("G91 G0 G43 Z-[#[2000+#4120]] H#4120", "line 1, column 14", "parameters and expressions"),
