@@ -20,7 +20,7 @@ use swarf::job::toolseq::{Decomposition, SeqOptions};
 use swarf::model::Width;
 use swarf::plan::LinkOptions;
 use swarf::post::Post;
-use swarf::sim::{SimEngine, SimOptions};
+use swarf::sim::SimEngine;
 use swarf::strategy::{OffsetOrder, Strategy};
 use swarf::{Error, Setting};
 
@@ -469,6 +469,10 @@ fn flag(s: Setting) -> Option<&'static str> {
         Setting::SimEngine => "--sim",
         Setting::OscillatorStepover => "--spiral",
         Setting::ShapeLevels => "--levels",
+        Setting::Strategy => "--strategy",
+        Setting::Post => "--post",
+        Setting::OffsetOrder => "--order",
+        Setting::Decomposition => "--decomposition",
         Setting::RapidRate
         | Setting::Floor
         | Setting::StockTop
@@ -732,83 +736,46 @@ fn pair(t: &str) -> Result<swarf::geom::DVec2, Failure> {
     }
 }
 
-/// The post an option names (the library's default when none).
-fn post_of(name: &Option<String>) -> Post {
-    name.as_deref().and_then(Post::parse).unwrap_or(Post::DEFAULT)
-}
-
-/// The strategy the options name, with the options of it they set. The options of every
-/// strategy the flags give are checked, whichever strategy runs: a bad value is an error even
-/// where it would not be used.
-fn strategy_of(o: &CommonOpts) -> Result<Strategy, Failure> {
-    use swarf::strategy::{AdaptiveOptions, MedialOptions, OffsetOptions, SpiralOptions, ZigzagOptions};
-    let adaptive = AdaptiveOptions {
-        overshoot_deg: o.overshoot.unwrap_or(AdaptiveOptions::DEFAULT.overshoot_deg),
-        ..AdaptiveOptions::DEFAULT
-    };
-    let order = match o.order {
-        Some(OrderArg::InsideOut) => OffsetOrder::InsideOut,
-        Some(OrderArg::OutsideIn) => OffsetOrder::OutsideIn,
-        None => OffsetOptions::DEFAULT.order,
-    };
-    let all = [
-        Strategy::Adaptive(adaptive.clone()),
-        Strategy::Offset(OffsetOptions { order }),
-        Strategy::Zigzag(ZigzagOptions { angle_deg: o.angle.unwrap_or(ZigzagOptions::DEFAULT.angle_deg) }),
-        Strategy::Medial(MedialOptions { cut_back: !o.full_circles }),
-        Strategy::Spiral(SpiralOptions {
-            zeta: o.zeta,
-            start: o.spiral_start.as_deref().map(pair).transpose()?,
-            floor: o.spiral_floor,
-            optimise: o.optimise,
-            search_cells: SpiralOptions::DEFAULT.search_cells,
-            adaptive,
+/// The run's settings the flags give ([`swarf::Settings`], which holds the defaults and the
+/// checks).
+fn settings(o: &CommonOpts) -> Result<swarf::Settings, Failure> {
+    Ok(swarf::Settings {
+        strategy: o.strategy.clone(),
+        post: o.post.clone(),
+        conventional: o.conventional,
+        order: o.order.map(|x| match x {
+            OrderArg::InsideOut => "inside-out".to_string(),
+            OrderArg::OutsideIn => "outside-in".to_string(),
         }),
-    ];
-    for s in &all {
-        s.validate()?;
-    }
-    let name = o.strategy.as_deref().unwrap_or(Strategy::DEFAULT.name());
-    all.into_iter()
-        .find(|s| s.name() == name)
-        .ok_or_else(|| Failure { user: true, msg: format!("--strategy: unknown strategy {name:?}") })
+        angle: o.angle,
+        stock_to_leave: o.stock_to_leave,
+        finish: o.finish,
+        ramp_angle: o.ramp_angle,
+        overshoot: o.overshoot,
+        feed_boost: o.feed_boost,
+        feed_links: o.feed_links,
+        level_by_level: o.level_by_level,
+        full_circles: o.full_circles,
+        zeta: o.zeta,
+        spiral_start: o.spiral_start.as_deref().map(pair).transpose()?,
+        spiral_floor: o.spiral_floor,
+        optimise: o.optimise,
+        arc_tolerance: o.arc_tolerance,
+        clearance: o.clearance,
+        res: o.res,
+        sim: o.sim.map(|x| match x {
+            SimArg::Raster => SimEngine::Raster.name().to_string(),
+            SimArg::Sdf => SimEngine::Sdf.name().to_string(),
+        }),
+        no_simulate: o.no_simulate,
+        exact_every_sample: o.exact_every_sample,
+        ..swarf::Settings::default()
+    })
 }
 
 /// The options of `rough` the flags give, on top of the library's defaults.
 fn options(o: &CommonOpts, input_name: String) -> Result<RoughOptions, Failure> {
-    let d = LinkOptions::DEFAULT;
-    let link = LinkOptions {
-        climb: !o.conventional,
-        stock_to_leave: o.stock_to_leave.unwrap_or(d.stock_to_leave),
-        finish: o.finish,
-        ramp_angle_deg: o.ramp_angle.unwrap_or(d.ramp_angle_deg),
-        arc_tol: o.arc_tolerance.unwrap_or(d.arc_tol),
-        clearance: o.clearance.unwrap_or(d.clearance),
-        feed_boost: o.feed_boost.unwrap_or(d.feed_boost),
-        feed_links: o.feed_links,
-        by_level: o.level_by_level,
-        ..d
-    };
-    let sim = SimOptions {
-        res: o.res,
-        engine: match o.sim {
-            Some(SimArg::Raster) => SimEngine::Raster,
-            Some(SimArg::Sdf) => SimEngine::Sdf,
-            None => SimOptions::DEFAULT.engine,
-        },
-        exact_every_sample: o.exact_every_sample,
-        ..SimOptions::DEFAULT
-    };
-    let opts = RoughOptions {
-        strategy: strategy_of(o)?,
-        link,
-        post: post_of(&o.post),
-        sim,
-        simulate: !o.no_simulate,
-        input_name,
-    };
-    opts.validate()?;
-    Ok(opts)
+    Ok(settings(o)?.rough_options(input_name)?)
 }
 
 fn run(job: &swarf::model::Job, opts: &RoughOptions, quiet: bool) -> Result<RoughResult, Failure> {
@@ -1109,131 +1076,50 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
     // when written)
     let early: Vec<&Path> = std::iter::once(report_path.as_path()).chain(a.html.as_deref()).collect();
     output::check(&early, &inputs)?;
-    let d = SeqOptions::DEFAULT;
-    let opts = SeqOptions {
-        decomposition: match a.decomposition {
-            Some(DecompositionArg::Trim) => Decomposition::Trim,
-            Some(DecompositionArg::Regions) => Decomposition::Regions,
-            None => d.decomposition,
-        },
-        prune: !a.exhaustive,
-        ramp_deg: a.ramp_angle.unwrap_or(d.ramp_deg),
-        clearance: a.clearance.unwrap_or(d.clearance),
-        simulate: !a.no_simulate,
-        ..d
+    let opts = swarf::Settings {
+        decomposition: a.decomposition.map(|d| {
+            decomposition_name(match d {
+                DecompositionArg::Trim => Decomposition::Trim,
+                DecompositionArg::Regions => Decomposition::Regions,
+            })
+            .to_string()
+        }),
+        exhaustive: a.exhaustive,
+        ramp_angle: a.ramp_angle,
+        clearance: a.clearance,
+        no_simulate: a.no_simulate,
+        post: a.post.clone(),
+        ..swarf::Settings::default()
     };
-    opts.validate()?;
+    let post = opts.post()?;
+    let opts = opts.seq_options()?;
     let t0 = std::time::Instant::now();
     let sp = swarf::job::toolseq::plan(&job, &db, &opts).map_err(|e| e.in_file(&a.input))?;
     let compute_s = t0.elapsed().as_secs_f64();
-    let post = post_of(&a.post);
     let best = sp.best();
     let input_name = a.input.file_name().and_then(|s| s.to_str()).unwrap_or("input").to_string();
+    let tools_file = a.tools.display().to_string();
+    let about = swarf::job::toolseq::PostAbout {
+        input_name: &input_name,
+        tools_file: &tools_file,
+        decomposition: opts.decomposition,
+        compute_s,
+        rest_pictures: !a.no_pictures,
+    };
+    let posted = swarf::job::toolseq::post_plan(&sp, &db, post, &about)?;
     let mut files: Vec<OutputFile> = Vec::new();
-    let mut programs = Vec::new();
-    let mut posted: Vec<(swarf::Toolpath, String, String)> = Vec::new();
-    for (i, p) in sp.programs.iter().enumerate() {
-        let stem = format!("{:02}_{}_D{}", i + 1, file_safe(&p.spec.id), swarf::post::num(p.spec.diameter, 3));
-        let mut tp = p.toolpath.clone();
-        tp.quantize(swarf::post::COORD_STEP, swarf::post::CENTER_STEP);
-        let t = tp.totals(db.machine.rapid_feed_mm_min);
-        let header = swarf::post::Header {
-            lines: vec![
-                format!(
-                    "{input_name}: z-level roughing, tool {} of {} in sequence {}",
-                    i + 1,
-                    sp.programs.len(),
-                    best.tools.join(" ")
-                ),
-                format!(
-                    "{} {}: D{} mm, {} teeth, width of cut {} mm, depth of cut {} mm",
-                    p.spec.id,
-                    p.spec.kind,
-                    swarf::post::num(p.spec.diameter, 3),
-                    p.spec.teeth,
-                    swarf::post::num(p.spec.width_of_cut, 3),
-                    swarf::post::num(p.spec.depth_of_cut, 3)
-                ),
-                format!(
-                    "feed {} mm/min, spindle {} rpm, cut {:.0} mm, rapid {:.0} mm, {:.2} min at {} mm/min rapid",
-                    swarf::post::num(p.spec.feed_mm_min(), 1),
-                    swarf::post::num(p.spec.spindle_rpm(), 0),
-                    t.cut_length_mm,
-                    t.rapid_length_mm,
-                    t.time_min,
-                    swarf::post::num(db.machine.rapid_feed_mm_min, 0)
-                ),
-            ],
-            spindle_rpm: p.spec.spindle_rpm(),
-        };
-        let gcode = swarf::post::write(&tp, post, &header)?;
-        let name = format!("{stem}.ngc");
-        if a.html.is_some() {
-            posted.push((tp.clone(), name.clone(), gcode.clone()));
+    for p in &posted.programs {
+        files.push(OutputFile::new(a.output_dir.join(&p.name), p.gcode.clone()));
+        if let Some((name, png)) = &p.rest_picture {
+            files.push(OutputFile::new(a.output_dir.join(name), png.clone()));
         }
-        files.push(OutputFile::new(a.output_dir.join(&name), gcode));
-        let mut entry = serde_json::json!({
-            "file": name,
-            "tool": p.spec.id,
-            "number": p.number,
-            "diameter": p.spec.diameter,
-            "feed_mm_min": p.spec.feed_mm_min(),
-            "spindle_rpm": p.spec.spindle_rpm(),
-            "cut_length_mm": t.cut_length_mm,
-            "rapid_length_mm": t.rapid_length_mm,
-            "time_min": t.time_min,
-        });
-        // the simulator's figures, as `rough`'s report names them: gouges, rapid collisions,
-        // plunges, the rest after the program (without a replay, the plunges it marks)
-        entry["simulated"] = serde_json::Value::Bool(p.check.is_some());
-        match &p.check {
-            Some(c) => {
-                let v = serde_json::to_value(c).map_err(|e| Failure { user: false, msg: e.to_string() })?;
-                if let (Some(obj), Some(v)) = (entry.as_object_mut(), v.as_object()) {
-                    obj.extend(v.iter().map(|(k, v)| (k.clone(), v.clone())));
-                }
-            }
-            None => entry["plunges"] = t.plunges.into(),
-        }
-        if let (Some(rest), false) = (&sp.rest, a.no_pictures) {
-            let pname = format!("{stem}_rest.png");
-            files.push(OutputFile::new(a.output_dir.join(&pname), rest.png(i)?));
-            entry["rest_picture"] = serde_json::Value::String(pname);
-        }
-        programs.push(entry);
     }
-    let report = serde_json::json!({
-        "input": input_name,
-        "tools_file": a.tools.display().to_string(),
-        "decomposition": opts.decomposition,
-        "machine": {
-            "cost_per_hour": db.machine.cost_per_hour,
-            "rapid_feed_mm_min": db.machine.rapid_feed_mm_min,
-            "tool_change_min": db.machine.tool_change_min,
-        },
-        "best": {
-            "tools": best.tools,
-            "diameters": best.diameters,
-            "machining_time_min": best.cost.machining_time_min,
-            "machining_cost": best.cost.machining_cost,
-            "tooling_cost": best.cost.tooling_cost,
-            "total_cost": best.cost.total_cost,
-            "programs": programs,
-        },
-        "candidates": sp.candidates,
-        "costed": sp.sequences.len(),
-        "evaluations": sp.evaluations,
-        "compute_s": compute_s,
-        "prepare_s": sp.prepare_s,
-        "search_s": sp.search_s,
-        "simulate_s": sp.simulate_s,
-        "sequences": sp.sequences,
-    });
+    let report = posted.report;
     let json = serde_json::to_string_pretty(&report).map_err(|e| Failure { user: false, msg: e.to_string() })?;
     files.push(OutputFile::new(&report_path, json + "\n"));
     if let Some(html) = &a.html {
         let progs: Vec<(&swarf::Toolpath, String, String)> =
-            posted.iter().map(|(tp, name, gcode)| (tp, name.clone(), gcode.clone())).collect();
+            posted.programs.iter().map(|p| (&p.toolpath, p.name.clone(), p.gcode.clone())).collect();
         let title = format!("{input_name} — tool sequence {}", best.tools.join(", "));
         let scene = swarf::view::of_plan(&job, &progs, &opts.sim, title).map_err(|e| e.in_file(&a.input))?;
         files.push(OutputFile::new(html, scene.html()));
@@ -1492,9 +1378,4 @@ fn plan_table(sp: &swarf::job::toolseq::SeqPlan, rows: usize) -> String {
         out.push_str(&format!("... {} more in the report\n", sp.sequences.len() - rows));
     }
     out
-}
-
-/// A tool id as part of a file name.
-fn file_safe(id: &str) -> String {
-    id.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect()
 }

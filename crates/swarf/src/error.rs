@@ -200,6 +200,14 @@ pub enum Setting {
     Oscillator,
     /// `shape.levels`: the level sets a picture of a shape draws.
     ShapeLevels,
+    /// `strategy`: the clearing strategy, by name.
+    Strategy,
+    /// `post`: the controller dialect, by name.
+    Post,
+    /// `offset.order`: the order of offset passes, by name.
+    OffsetOrder,
+    /// `toolseq.decomposition`: how a later tool is confined, by name.
+    Decomposition,
 }
 
 impl Setting {
@@ -251,6 +259,10 @@ impl Setting {
             Setting::OscillatorStepover => "oscillator.stepover",
             Setting::Oscillator => "oscillator",
             Setting::ShapeLevels => "shape.levels",
+            Setting::Strategy => "strategy",
+            Setting::Post => "post",
+            Setting::OffsetOrder => "offset.order",
+            Setting::Decomposition => "toolseq.decomposition",
         }
     }
 }

@@ -83,8 +83,9 @@ pub mod toolpath;
 pub mod view;
 
 pub use error::{Error, Result, Setting};
-pub use io::{Input, Overrides, example_job, load_input, load_job};
+pub use io::{Input, Overrides, example_job, load_input, load_job, read_case_bytes};
 pub use job::rough::{RoughOptions, RoughResult, Stage, rough};
+pub use job::settings::Settings;
 pub use job::toolseq::{SeqOptions, SeqPlan, plan as plan_tools};
 pub use job::zlevel::rough as rough_mesh;
 pub use model::{Cutting, Job, MeshJob, Tool, Width};

@@ -164,7 +164,12 @@ pub fn read_input(path: &Path) -> Result<Input> {
 
 /// The STL file a 3D case at `path` names (`part_stl`, relative to the case), if it names one.
 pub fn part_stl_of(path: &Path) -> Option<PathBuf> {
-    let root: Value = serde_json::from_slice(&std::fs::read(path).ok()?).ok()?;
+    part_stl_of_bytes(path, &std::fs::read(path).ok()?)
+}
+
+/// The STL file the 3D case `bytes` (at `path`) names, if it names one.
+pub fn part_stl_of_bytes(path: &Path, bytes: &[u8]) -> Option<PathBuf> {
+    let root: Value = serde_json::from_slice(bytes).ok()?;
     let stl = root.get("part_stl")?.as_str()?;
     Some(path.parent().unwrap_or(Path::new("")).join(stl))
 }

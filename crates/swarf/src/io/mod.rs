@@ -432,18 +432,7 @@ pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
         Input::Mesh(Box::new(MeshJob::new(name, mesh, stock_lo, stock_hi, cutting)))
     } else if is_case {
         let input = case::read_input(path)?;
-        match &input {
-            Input::Flat(j) => {
-                reading.kind = "case";
-                if let Some((lo, hi)) = j.stock.union(&j.part).bounds() {
-                    reading.size_mm = [hi.x - lo.x, hi.y - lo.y, j.stock_top - j.floor];
-                }
-            }
-            Input::Mesh(j) => {
-                reading.kind = "3D case";
-                reading.size_mm = (j.stock_hi - j.stock_lo).to_array();
-            }
-        }
+        case_reading(&input, &mut reading);
         input
     } else {
         let d = swarf_import::read_drawing(path, &ov.import)?;
@@ -463,7 +452,60 @@ pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
         }
         Input::Flat(Box::new(job))
     };
-    let input = match input {
+    let input = overridden(input, ov, path)?;
+    reading.files.push(path.to_path_buf());
+    if is_case {
+        reading.files.extend(case::part_stl_of(path));
+    }
+    Ok((input, reading))
+}
+
+/// [`read_input`] of a case held in memory (a JSON text, `bytes`) instead of a file: `path`
+/// names it in errors, and a 3D case's `part_stl` is read relative to its folder. The
+/// reading's files are the STL part alone.
+///
+/// ```
+/// use swarf::{Input, Overrides, io::read_case_bytes};
+/// let text = br#"{"tool": {"diameter": 6}, "stock": [[0,0],[40,0],[40,30],[0,30]], "floor": -3}"#;
+/// let (input, reading) = read_case_bytes("mine.json".as_ref(), text, &Overrides::DEFAULT)?;
+/// assert!(matches!(input, Input::Flat(_)));
+/// assert_eq!(reading.kind, "case");
+/// // a bad case names the place and the reason
+/// let err = read_case_bytes("mine.json".as_ref(), br#"{"tool": {"diameter": 6}}"#, &Overrides::DEFAULT).unwrap_err();
+/// assert_eq!(err.to_string(), "mine.json: stock: missing: the raw stock outline [[x, y], …]");
+/// # Ok::<(), swarf::Error>(())
+/// ```
+pub fn read_case_bytes(path: &Path, bytes: &[u8], ov: &Overrides) -> Result<(Input, Reading)> {
+    ov.validate()?;
+    let mut reading = Reading::default();
+    let input = case::parse_input(path, bytes)?;
+    case_reading(&input, &mut reading);
+    let input = overridden(input, ov, path)?;
+    if let Input::Mesh(_) = input {
+        reading.files.extend(case::part_stl_of_bytes(path, bytes));
+    }
+    Ok((input, reading))
+}
+
+/// What a case is and its size, for the reading.
+fn case_reading(input: &Input, reading: &mut Reading) {
+    match input {
+        Input::Flat(j) => {
+            reading.kind = "case";
+            if let Some((lo, hi)) = j.stock.union(&j.part).bounds() {
+                reading.size_mm = [hi.x - lo.x, hi.y - lo.y, j.stock_top - j.floor];
+            }
+        }
+        Input::Mesh(j) => {
+            reading.kind = "3D case";
+            reading.size_mm = (j.stock_hi - j.stock_lo).to_array();
+        }
+    }
+}
+
+/// The input with the overrides applied, and checked again (an error said of `path`).
+fn overridden(input: Input, ov: &Overrides, path: &Path) -> Result<Input> {
+    Ok(match input {
         Input::Flat(mut job) => {
             ov.apply_to_job(&mut job);
             job.validate().map_err(|e| e.in_file(path))?;
@@ -474,12 +516,7 @@ pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
             job.validate().map_err(|e| e.in_file(path))?;
             Input::Mesh(job)
         }
-    };
-    reading.files.push(path.to_path_buf());
-    if is_case {
-        reading.files.extend(case::part_stl_of(path));
-    }
-    Ok((input, reading))
+    })
 }
 
 fn head(path: &Path) -> Vec<u8> {

@@ -139,6 +139,53 @@ pub fn rough_planned(
     Ok(done)
 }
 
+/// Proves a program made elsewhere (read from G-code by [`crate::io::gcode`], or by another
+/// system) on `job` as [`rough`] proves its own: replayed on the simulator `opts.sim` names
+/// (its cell size fitted to the program's tool and the stock as [`rough`] fits it), with the
+/// report's figures (engagement, gouges, rapid collisions, rest, machining time at the job's
+/// rapid rate). The program's tool is its own ([`Toolpath::tool`]); the report's strategy is
+/// `program`.
+///
+/// ```
+/// use swarf::{Overrides, RoughOptions, load_job, rough, io::gcode};
+/// let case = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/cases/round_pocket.json");
+/// let job = load_job(case.as_ref(), &Overrides::DEFAULT)?;
+/// let own = rough(&job, &RoughOptions::DEFAULT, &mut |_, _| {})?;
+/// // the program read back from its G-code gives the same figures
+/// let read = gcode::read(&own.gcode, "p.ngc".as_ref(), &gcode::ReadOptions { tool: job.cutting.tool.clone(), clearance_z: None })?;
+/// let rep = swarf::job::rough::prove(&job, &read.toolpath, &RoughOptions::DEFAULT)?;
+/// assert_eq!(rep.gouges, 0);
+/// assert!((rep.time_min - own.report.time_min).abs() < 1e-3 * own.report.time_min);
+/// # Ok::<(), swarf::Error>(())
+/// ```
+pub fn prove(job: &Job, tp: &crate::toolpath::Toolpath, opts: &RoughOptions) -> Result<Report> {
+    let mut job = job.clone();
+    job.cutting.tool = tp.tool.clone();
+    job.validate()?;
+    opts.validate()?;
+    let t0 = Instant::now();
+    let d = job.cutting.tool.diameter;
+    let sim = job.stock.bounds().and_then(|(lo, hi)| opts.sim.fitted(d, lo, hi)).unwrap_or_else(|| opts.sim.clone());
+    let regions = job.regions(job.radius(), 0.0)?;
+    let (rp, rest) = crate::sim::simulate(&job, &regions, &sim, tp, &mut |_| {})?;
+    let c = &job.cutting;
+    let mut rep = Report {
+        swarf_version: env!("CARGO_PKG_VERSION").to_string(),
+        input: opts.input_name.clone(),
+        strategy: "program".into(),
+        tool_diameter_mm: d,
+        stepover: c.width.stepover(),
+        engagement_ref_deg: c.width.engagement_deg(),
+        sim_res_mm: sim.res_for(d),
+        ..Default::default()
+    };
+    report::fill(&mut rep, tp, &rp, &rest, c.rapid_rate);
+    report::fill_efficiency(&mut rep, c.stepover_mm() * job.level_depth() * c.feed);
+    rep.simulate_s = t0.elapsed().as_secs_f64();
+    rep.total_s = rep.simulate_s;
+    Ok(rep)
+}
+
 /// What the program's header and report say about the job.
 pub(crate) struct About<'a> {
     /// The job's name (when the options name no input).

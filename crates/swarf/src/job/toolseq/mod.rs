@@ -49,10 +49,12 @@ use std::collections::HashMap;
 use std::time::Instant;
 
 mod paths;
+pub mod posted;
 mod replay;
 mod search;
 
 pub use paths::NEED_MARGIN;
+pub use posted::{PostAbout, PostedPlan, PostedProgram, post_plan};
 pub use replay::{ProgramCheck, RestMaps};
 
 /// How a later tool is confined to what the earlier tools left (paper 3 §4).
