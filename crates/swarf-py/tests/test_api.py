@@ -154,6 +154,7 @@ def test_bad_settings_raise_setting_errors_and_unknown_keywords_type_errors():
         ({"tool_diameter": -1}, "tool.diameter"),
         ({"engagement": 200}, "width.engagement_deg"),
         ({"res": 0}, "sim.res"),
+        ({"res": 1e-300}, "sim.res"),  # (a grid whose cell count would overflow)
     ]:
         with pytest.raises(swarf.SettingError) as e:
             swarf.rough(job, **kw)
@@ -209,12 +210,14 @@ def test_progress_reaches_the_callback_and_its_errors_the_caller():
 
     with pytest.raises(KeyError, match="stop"):
         swarf.rough(job, progress=boom)
+    with pytest.raises(TypeError, match="progress"):
+        swarf.rough(job, progress=5)
 
 
 def test_the_gil_is_released_two_threads_plan_at_once():
-    """Two threads each rough a job; with the GIL released while swarf works, the second starts
-    working before the first ends (each call's work spans the time from its first to its last
-    progress report). A Python thread counting meanwhile gets the interpreter too."""
+    """Two jobs roughed in two threads overlap (each call's work spans its first to its last
+    progress report) and take less time than one after the other (best of two tries: with the
+    GIL held they would take as long); a Python thread counting beside a run keeps counting."""
     job = swarf.load(EXAMPLES / "cases/pocket_islands.json")
     spans = {}
 
@@ -223,21 +226,32 @@ def test_the_gil_is_released_two_threads_plan_at_once():
         swarf.rough(job, progress=lambda s, f: marks.append(time.perf_counter()))
         spans[i] = (marks[0], marks[-1])
 
-    t0 = time.perf_counter()
-    work("alone")
-    alone = time.perf_counter() - t0
-    threads = [threading.Thread(target=work, args=(i,)) for i in (0, 1)]
-    t0 = time.perf_counter()
-    for t in threads:
-        t.start()
+    ratios = []
+    for _ in range(2):
+        t0 = time.perf_counter()
+        work("a")
+        work("b")
+        one_by_one = time.perf_counter() - t0
+        threads = [threading.Thread(target=work, args=(i,)) for i in (0, 1)]
+        t0 = time.perf_counter()
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        both = time.perf_counter() - t0
+        (a0, a1), (b0, b1) = spans[0], spans[1]
+        assert max(a0, b0) < min(a1, b1), "the two runs did not overlap"
+        ratios.append(both / one_by_one)
+        print(f"two jobs one after the other {one_by_one:.2f} s, in two threads {both:.2f} s ({one_by_one / both:.2f}x)")
+    assert min(ratios) < 0.95, ratios
+
+    runner = threading.Thread(target=work, args=("c",))
     count = 0
-    while any(t.is_alive() for t in threads):
+    runner.start()
+    while runner.is_alive():
         count += 1
-    both = time.perf_counter() - t0
-    (a0, a1), (b0, b1) = spans[0], spans[1]
-    print(f"one job {alone:.2f} s, two in two threads {both:.2f} s ({both / alone:.2f}x), the main thread counted {count}")
-    assert max(a0, b0) < min(a1, b1), "the two runs did not overlap"
-    assert count > 1000, "the main thread was held up while swarf worked"
+    print(f"a Python thread counted to {count} during a run")
+    assert count > 10000, "the main thread was held up while swarf worked"
 
 
 def test_the_stubs_name_what_the_module_has():

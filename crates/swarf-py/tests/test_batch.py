@@ -95,6 +95,12 @@ def test_swarf_batch_runs_a_folder_through_a_scheduler(local_cluster, tmp_path, 
     before = files_of(folder / "swarf-out")
     assert cluster.main([str(folder), "--scheduler", lc.scheduler_address, "--tool-diameter", "5", "-q"]) == 0
     assert files_of(folder / "swarf-out") == before
+    # the command is installed with the package
+    from importlib.metadata import entry_points
+
+    eps = entry_points()
+    scripts = eps.select(group="console_scripts") if hasattr(eps, "select") else eps.get("console_scripts", [])
+    assert any(e.name == "swarf-batch" and e.value == "swarf.cluster:main" for e in scripts)
     # a folder with no job files
     empty = tmp_path / "empty"
     empty.mkdir()

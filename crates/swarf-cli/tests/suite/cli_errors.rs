@@ -243,6 +243,10 @@ fn other_bad_numbers() {
     expect_failure(&d, &c, &["--feed", "-100"], 2, &["feed", "positive"]);
     expect_failure(&d, &c, &["--ramp-angle", "90"], 2, &["--ramp-angle", "90"]);
     expect_failure(&d, &c, &["--res", "0"], 2, &["--res", "positive"]);
+    // a cell so small that the grid's cell count overflows: refused by its size, not a panic
+    // (a debug build's overflow) nor a count wrapped round to a small one (a release build's)
+    expect_failure(&d, &c, &["--res", "1e-300"], 2, &["--res", "too large"]);
+    expect_failure(&d, &c, &["--res", "1e-9", "--sim", "sdf"], 2, &["--res", "too large"]);
     expect_failure(&d, &c, &["--strategy", "spiral", "--spiral-floor", "0"], 2, &["--spiral-floor", "(0, 1]"]);
     expect_failure(&d, &c, &["--strategy", "spiral", "--zeta", "2"], 2, &["--zeta", "(0, 1]"]);
     // `--clearance -1` is taken by clap as an unknown flag (the option does not allow negative

@@ -198,6 +198,8 @@ def rough(job: Job, progress: Optional[Progress] = None, **settings: Any) -> Rou
     Raises ``SettingError``, ``InputError``, ``JobError`` (nothing to cut, a tool that fits
     nowhere).
     """
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress: expected a function (stage, fraction), got {type(progress).__name__}")
     return RoughResult(_swarf.rough(job, progress, **settings))
 
 

@@ -45,9 +45,10 @@ impl Grid {
         out
     }
 
-    /// Number of cells.
+    /// Number of cells (`usize::MAX` when that does not fit: a grid a hostile cell size asks
+    /// for is refused by its size, not wrapped round to a small one).
     pub fn len(&self) -> usize {
-        self.nx * self.ny
+        self.nx.saturating_mul(self.ny)
     }
 
     /// True for a grid without cells.
