@@ -30,6 +30,7 @@ use errors::to_py;
 enum Source {
     File(PathBuf),
     Case { path: PathBuf, text: Vec<u8> },
+    Mesh { path: PathBuf, mesh: swarf::geom::mesh::Mesh },
 }
 
 /// A job read from a file or from Python data, with the overrides it was read with.
@@ -52,6 +53,7 @@ impl PyJob {
             .detach(move || match &src {
                 Source::File(p) => swarf::io::read_input(p, &ov),
                 Source::Case { path, text } => swarf::read_case_bytes(path, text, &ov),
+                Source::Mesh { path, mesh } => swarf::io::read_mesh(path, mesh.clone(), &ov),
             })
             .map_err(|e| to_py(py, e))?;
         Ok(PyJob { input, reading, source, overrides, given: kw })
@@ -60,7 +62,7 @@ impl PyJob {
     fn source_path(&self) -> &Path {
         match &self.source {
             Source::File(p) => p,
-            Source::Case { path, .. } => path,
+            Source::Case { path, .. } | Source::Mesh { path, .. } => path,
         }
     }
 
@@ -440,6 +442,67 @@ impl PyJob {
         let text: String = py.import("json")?.call_method("dumps", (case,), Some(&opts))?.extract()?;
         let path = base_dir.unwrap_or_default().join(format!("{name}.json"));
         load_case_text(py, &text, path, kw)
+    }
+
+    /// A 3D job from a mesh given as Python data: `vertices` (n, 3) and `triangles` (m, 3)
+    /// (indices into the vertices, counter-clockwise seen from outside), as lists or NumPy
+    /// arrays. It is roughed as an STL part read on its own: placed and given its stock box by
+    /// the overrides (`stock_margin`, `stock_above`, `part_rotate`, …). `name` names the job
+    /// (and the mesh in errors, as `NAME.stl`).
+    #[staticmethod]
+    #[pyo3(signature = (vertices, triangles, name="part", **kw))]
+    fn from_mesh(
+        py: Python<'_>,
+        vertices: &Bound<'_, PyAny>,
+        triangles: &Bound<'_, PyAny>,
+        name: &str,
+        kw: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<PyJob> {
+        let kw = pairs(kw)?;
+        for (k, _) in &kw {
+            if !OVERRIDES.contains(&k.as_str()) {
+                return Err(unknown(k));
+            }
+        }
+        let np = py.import("numpy")?;
+        let v = np.call_method1("ascontiguousarray", (vertices, "float64"))?;
+        let t = np.call_method1("ascontiguousarray", (triangles, "int64"))?;
+        let v = v
+            .cast::<numpy::PyArray2<f64>>()
+            .map_err(|_| PyValueError::new_err("vertices: expected an (n, 3) array of numbers"))?;
+        let t = t
+            .cast::<numpy::PyArray2<i64>>()
+            .map_err(|_| PyValueError::new_err("triangles: expected an (m, 3) array of vertex indices"))?;
+        let (vr, tr) = (v.readonly(), t.readonly());
+        let (va, ta) = (vr.as_array(), tr.as_array());
+        if va.ncols() != 3 || ta.ncols() != 3 {
+            return Err(PyValueError::new_err(format!(
+                "vertices {:?} and triangles {:?}: each must have 3 columns",
+                va.shape(),
+                ta.shape()
+            )));
+        }
+        let path = PathBuf::from(format!("{name}.stl"));
+        let verts: Vec<[f64; 3]> = va.rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+        let mut tris: Vec<[usize; 3]> = Vec::with_capacity(ta.nrows());
+        for (i, r) in ta.rows().into_iter().enumerate() {
+            let mut t = [0usize; 3];
+            for (k, slot) in t.iter_mut().enumerate() {
+                *slot = usize::try_from(r[k]).map_err(|_| {
+                    to_py(
+                        py,
+                        swarf::Error::input(
+                            &path,
+                            format!("triangles[{i}]"),
+                            format!("vertex {}: indices start at 0", r[k]),
+                        ),
+                    )
+                })?;
+            }
+            tris.push(t);
+        }
+        let mesh = swarf::io::stl::from_triangles(&path, &verts, &tris).map_err(|e| to_py(py, e))?;
+        PyJob::read(py, Source::Mesh { path, mesh }, kw)
     }
 
     fn __repr__(&self) -> String {

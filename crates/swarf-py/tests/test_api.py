@@ -96,6 +96,34 @@ def test_a_case_from_python_data_is_the_files_job():
     assert a.gcode == b.gcode
 
 
+def test_a_mesh_from_python_data_is_the_stl_files_job():
+    stl = EXAMPLES / "parts/bowl_cavity.stl"
+    raw = stl.read_bytes()
+    n = int(np.frombuffer(raw[80:84], "<u4")[0])
+    rec = np.frombuffer(raw[84:], dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")], count=n)
+    vertices = rec["v"].reshape(-1, 3).astype(np.float64)
+    triangles = np.arange(3 * n).reshape(n, 3)
+    job = swarf.Job.from_mesh(vertices, triangles, name="bowl_cavity", tool_diameter=10, stepdown=5)
+    assert job.kind == "3d" and job.tool_diameter == 10
+    a = swarf.rough(job, simulate=False)
+    b = swarf.rough(swarf.load(stl, tool_diameter=10, stepdown=5), simulate=False)
+    assert a.gcode == b.gcode
+    # a box as 8 shared vertices and 12 triangles, from lists
+    box = [[40.0 * (i & 1), 30.0 * (i >> 1 & 1), 10.0 * (i >> 2)] for i in range(8)]
+    tris = [[0, 2, 3], [0, 3, 1], [4, 5, 7], [4, 7, 6], [0, 1, 5], [0, 5, 4], [2, 6, 7], [2, 7, 3], [0, 4, 6], [0, 6, 2], [1, 3, 7], [1, 7, 5]]
+    assert swarf.Job.from_mesh(box, tris, name="box", stock_above=2).summary.startswith("read STL part 40.0 × 30.0 × 10.0 mm")
+    with pytest.raises(swarf.InputError) as e:
+        swarf.Job.from_mesh(box, [[0, 1, 8]], name="box")
+    assert (e.value.file, e.value.place) == ("box.stl", "triangles[0]")
+    with pytest.raises(swarf.InputError, match="indices start at 0"):
+        swarf.Job.from_mesh(box, [[0, 1, -1]], name="box")
+    with pytest.raises(swarf.InputError) as e:
+        swarf.Job.from_mesh([[0, 0, 0], [1, float("nan"), 0], [0, 1, 0]], [[0, 1, 2]])
+    assert e.value.place == "vertices[1]"
+    with pytest.raises(ValueError):
+        swarf.Job.from_mesh([[0, 0], [1, 0], [0, 1]], [[0, 1, 2]])
+
+
 def test_arrays_have_their_shapes_and_types():
     res = swarf.rough(swarf.load(EXAMPLES / "cases/round_pocket.json"))
     tp = res.toolpath

@@ -82,6 +82,9 @@ class Job:
     @staticmethod
     def from_dict(case: Any, name: str = "job", base_dir: Optional[_Path] = None, **overrides: Any) -> Job:
         """A job from a case given as Python data (lists or NumPy arrays of points)."""
+    @staticmethod
+    def from_mesh(vertices: Any, triangles: Any, name: str = "part", **overrides: Any) -> Job:
+        """A 3D job from a mesh: vertices (n, 3) and triangles (m, 3) of vertex indices."""
 
 class RoughOutput:
     @property

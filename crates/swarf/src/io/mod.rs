@@ -389,47 +389,7 @@ pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
     let is_stl = ext == "stl" || (ext != "json" && ext != "dxf" && ext != "svg" && sniff_stl(path));
     let is_case = !is_stl && (ext == "json" || (ext != "dxf" && ext != "svg" && sniff_json(path)));
     let input = if is_stl {
-        let mut mesh = stl::read(path)?;
-        let mut place = ov.placement;
-        place.scale *= ov.import.units.map_or(1.0, |u| u.mm());
-        mesh.transform(&place);
-        stl::check_size(path, &mesh, "part", "the unit, --part-scale and --part-translate")?;
-        let mut sideways = None;
-        if ov.placement.rotate_deg == [0.0; 3] {
-            match stl::lay_flat(&mesh).filter(|_| ov.lay_flat) {
-                Some((rot, what)) => {
-                    mesh.transform(&Placement { rotate_deg: rot, ..Placement::IDENTITY });
-                    reading.inferred.push(what);
-                }
-                None => sideways = stl::orientation_warning(&mesh),
-            }
-        }
-        let (lo, hi) = mesh.bounds().ok_or_else(|| Error::input(path, "file", "the mesh is empty"))?;
-        reading.kind = "STL part";
-        reading.triangles = mesh.tris.len();
-        let size = hi - lo;
-        reading.size_mm = size.to_array();
-        reading.units = match ov.import.units {
-            Some(u) => format!("{} as given", unit_name(u)),
-            None => "millimetres assumed: an STL file names no unit".into(),
-        };
-        if ov.import.units.is_none() && ov.placement.scale == 1.0 {
-            reading.warnings.extend(unit_warning(size.max_element()));
-        }
-        reading.warnings.extend(sideways);
-        let m = ov.stock_margin;
-        if hi.z + ov.stock_above <= lo.z {
-            return Err(Error::input(
-                path,
-                "file",
-                "the part is flat: there is nothing above its lowest point to rough (--stock-above MM puts stock on it)",
-            ));
-        }
-        let cutting = Cutting::with_tool_diameter(ov.tool_diameter.unwrap_or(Tool::DEFAULT.diameter));
-        let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("part");
-        let (stock_lo, stock_hi) =
-            (DVec3::new(lo.x - m, lo.y - m, lo.z), DVec3::new(hi.x + m, hi.y + m, hi.z + ov.stock_above));
-        Input::Mesh(Box::new(MeshJob::new(name, mesh, stock_lo, stock_hi, cutting)))
+        stl_input(path, stl::read(path)?, ov, &mut reading)?
     } else if is_case {
         let input = case::read_input(path)?;
         case_reading(&input, &mut reading);
@@ -485,6 +445,76 @@ pub fn read_case_bytes(path: &Path, bytes: &[u8], ov: &Overrides) -> Result<(Inp
         reading.files.extend(case::part_stl_of_bytes(path, bytes));
     }
     Ok((input, reading))
+}
+
+/// [`read_input`] of a part held in memory as a mesh ([`stl::from_triangles`], or
+/// [`stl::parse`] of an STL file's bytes): `path` names it in errors and names the job. Placed,
+/// laid flat and given its stock box as an STL file is.
+///
+/// ```
+/// use swarf::{Input, Overrides, io::{read_mesh, stl}};
+/// // a 40 × 30 × 10 mm box as 8 vertices and 12 triangles
+/// let v: Vec<[f64; 3]> = (0..8).map(|i| [40.0 * (i & 1) as f64, 30.0 * (i >> 1 & 1) as f64, 10.0 * (i >> 2) as f64]).collect();
+/// let t = [[0, 2, 3], [0, 3, 1], [4, 5, 7], [4, 7, 6], [0, 1, 5], [0, 5, 4], [2, 6, 7], [2, 7, 3], [0, 4, 6], [0, 6, 2], [1, 3, 7], [1, 7, 5]];
+/// let mesh = stl::from_triangles("box.stl".as_ref(), &v, &t)?;
+/// let (input, reading) = read_mesh("box.stl".as_ref(), mesh, &Overrides::DEFAULT)?;
+/// assert!(matches!(input, Input::Mesh(_)));
+/// assert_eq!(reading.triangles, 12);
+/// // an index out of range names the triangle
+/// let err = stl::from_triangles("box.stl".as_ref(), &v, &[[0, 1, 8]]).unwrap_err();
+/// assert_eq!(err.to_string(), "box.stl: triangles[0]: vertex 8 of 8 vertices");
+/// # Ok::<(), swarf::Error>(())
+/// ```
+pub fn read_mesh(path: &Path, mesh: crate::geom::mesh::Mesh, ov: &Overrides) -> Result<(Input, Reading)> {
+    ov.validate()?;
+    let mut reading = Reading::default();
+    let input = stl_input(path, mesh, ov, &mut reading)?;
+    Ok((overridden(input, ov, path)?, reading))
+}
+
+/// The 3D job of an STL part read on its own: placed by the overrides, laid flat when drawn
+/// sideways, in a stock box round it.
+fn stl_input(path: &Path, mut mesh: crate::geom::mesh::Mesh, ov: &Overrides, reading: &mut Reading) -> Result<Input> {
+    let mut place = ov.placement;
+    place.scale *= ov.import.units.map_or(1.0, |u| u.mm());
+    mesh.transform(&place);
+    stl::check_size(path, &mesh, "part", "the unit, --part-scale and --part-translate")?;
+    let mut sideways = None;
+    if ov.placement.rotate_deg == [0.0; 3] {
+        match stl::lay_flat(&mesh).filter(|_| ov.lay_flat) {
+            Some((rot, what)) => {
+                mesh.transform(&Placement { rotate_deg: rot, ..Placement::IDENTITY });
+                reading.inferred.push(what);
+            }
+            None => sideways = stl::orientation_warning(&mesh),
+        }
+    }
+    let (lo, hi) = mesh.bounds().ok_or_else(|| Error::input(path, "file", "the mesh is empty"))?;
+    reading.kind = "STL part";
+    reading.triangles = mesh.tris.len();
+    let size = hi - lo;
+    reading.size_mm = size.to_array();
+    reading.units = match ov.import.units {
+        Some(u) => format!("{} as given", unit_name(u)),
+        None => "millimetres assumed: an STL file names no unit".into(),
+    };
+    if ov.import.units.is_none() && ov.placement.scale == 1.0 {
+        reading.warnings.extend(unit_warning(size.max_element()));
+    }
+    reading.warnings.extend(sideways);
+    let m = ov.stock_margin;
+    if hi.z + ov.stock_above <= lo.z {
+        return Err(Error::input(
+            path,
+            "file",
+            "the part is flat: there is nothing above its lowest point to rough (--stock-above MM puts stock on it)",
+        ));
+    }
+    let cutting = Cutting::with_tool_diameter(ov.tool_diameter.unwrap_or(Tool::DEFAULT.diameter));
+    let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("part");
+    let (stock_lo, stock_hi) =
+        (DVec3::new(lo.x - m, lo.y - m, lo.z), DVec3::new(hi.x + m, hi.y + m, hi.z + ov.stock_above));
+    Ok(Input::Mesh(Box::new(MeshJob::new(name, mesh, stock_lo, stock_hi, cutting))))
 }
 
 /// What a case is and its size, for the reading.

@@ -150,6 +150,11 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
             ),
         ));
     };
+    not_empty(path, mesh)
+}
+
+/// The mesh, or an error when it has no facet left (none read, or all degenerate).
+fn not_empty(path: &Path, mesh: Mesh) -> Result<Mesh> {
     if mesh.tris.is_empty() {
         return Err(Error::input(
             path,
@@ -162,6 +167,35 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Mesh> {
         ));
     }
     Ok(mesh)
+}
+
+/// A mesh from vertices and triangles (indices into the vertices, counter-clockwise seen from
+/// outside), checked as a file's facets are: coordinates finite and within the numbers swarf
+/// reads, indices in range, degenerate triangles dropped, at least one left. `path` names the
+/// mesh in errors, which name the triangle or vertex.
+pub fn from_triangles(path: &Path, vertices: &[[f64; 3]], triangles: &[[usize; 3]]) -> Result<Mesh> {
+    for (i, v) in vertices.iter().enumerate() {
+        let p = DVec3::from_array(*v);
+        if !(p.is_finite() && p.abs().max_element() <= crate::limits::MAX_NUMBER) {
+            return Err(Error::input(
+                path,
+                format!("vertices[{i}]"),
+                format!("coordinate is not a finite number within ±{:e} ({p})", crate::limits::MAX_NUMBER),
+            ));
+        }
+    }
+    let mut mesh = Mesh { tris: Vec::with_capacity(triangles.len()), dropped: 0, binary: false };
+    for (i, t) in triangles.iter().enumerate() {
+        let mut tri = [DVec3::ZERO; 3];
+        for (k, &ix) in t.iter().enumerate() {
+            let v = vertices.get(ix).ok_or_else(|| {
+                Error::input(path, format!("triangles[{i}]"), format!("vertex {ix} of {} vertices", vertices.len()))
+            })?;
+            tri[k] = DVec3::from_array(*v);
+        }
+        push(&mut mesh, tri);
+    }
+    not_empty(path, mesh)
 }
 
 fn is_binary(bytes: &[u8]) -> bool {
