@@ -676,15 +676,7 @@ fn toolpath_arrays<'py>(py: Python<'py>, tp: &swarf::Toolpath) -> PyResult<Bound
     );
     for m in &tp.moves {
         xyz.extend(m.to.to_array());
-        kind.push(match m.kind {
-            MoveKind::Rapid => 0u8,
-            MoveKind::Cut => 1,
-            MoveKind::Entry => 2,
-            MoveKind::Plunge => 3,
-            MoveKind::Link => 4,
-            MoveKind::Descend => 5,
-            MoveKind::Finish => 6,
-        });
+        kind.push(m.kind.code());
         feed.push(if m.is_rapid() { 0.0 } else { m.feed });
         match m.motion {
             Motion::Line => {
@@ -857,6 +849,7 @@ fn _swarf(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("POSTS", swarf::Post::NAMES.to_vec())?;
     m.add("OVERRIDES", OVERRIDES.to_vec())?;
     m.add("SETTINGS", SETTINGS.to_vec())?;
+    m.add("MOVE_KINDS", swarf::toolpath::MoveKind::NAMES.to_vec())?;
     m.add("VERSION", env!("CARGO_PKG_VERSION"))?;
     errors::register(m)?;
     Ok(())

@@ -52,8 +52,8 @@ def test_options_are_the_command_lines(swarf_bin, tmp_path):
 
 def test_a_3d_job_is_roughed_in_z_levels_as_the_command_line(swarf_bin, tmp_path):
     case = EXAMPLES / "3d/bowl_cavity.json"
-    gcode, report = cli(swarf_bin, [case, "--stepdown", "4"], tmp_path)
-    job = swarf.load(case, stepdown=4)
+    gcode, report = cli(swarf_bin, [case, "--stepdown", "8"], tmp_path)
+    job = swarf.load(case, stepdown=8)
     assert job.kind == "3d"
     res = swarf.rough(job)
     assert res.gcode == gcode
@@ -103,10 +103,10 @@ def test_a_mesh_from_python_data_is_the_stl_files_job():
     rec = np.frombuffer(raw[84:], dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")], count=n)
     vertices = rec["v"].reshape(-1, 3).astype(np.float64)
     triangles = np.arange(3 * n).reshape(n, 3)
-    job = swarf.Job.from_mesh(vertices, triangles, name="bowl_cavity", tool_diameter=10, stepdown=5)
+    job = swarf.Job.from_mesh(vertices, triangles, name="bowl_cavity", tool_diameter=10, stepdown=10)
     assert job.kind == "3d" and job.tool_diameter == 10
     a = swarf.rough(job, simulate=False)
-    b = swarf.rough(swarf.load(stl, tool_diameter=10, stepdown=5), simulate=False)
+    b = swarf.rough(swarf.load(stl, tool_diameter=10, stepdown=10), simulate=False)
     assert a.gcode == b.gcode
     # a box as 8 shared vertices and 12 triangles, from lists
     box = [[40.0 * (i & 1), 30.0 * (i >> 1 & 1), 10.0 * (i >> 2)] for i in range(8)]

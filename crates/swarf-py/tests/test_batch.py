@@ -19,7 +19,7 @@ def twenty_jobs():
     """The example cases, each at three tool diameters: 20 jobs of a second or less each."""
     jobs = []
     for case in CASES:
-        for d in (4, 5, 6):
+        for d in (5, 6, 8):
             jobs.append({"input": case, "name": f"{case.stem}_D{d}", "tool_diameter": d})
     return jobs[:20]
 

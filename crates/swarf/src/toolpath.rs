@@ -25,6 +25,25 @@ pub enum MoveKind {
     Finish,
 }
 
+impl MoveKind {
+    /// The kinds' names, in the order of their numbers ([`MoveKind::code`]).
+    pub const NAMES: [&'static str; 7] = ["rapid", "cut", "entry", "plunge", "link", "descend", "finish"];
+
+    /// The kind's number, its index in [`MoveKind::NAMES`]: the viewer's packed moves and the
+    /// Python package's arrays hold it.
+    pub fn code(self) -> u8 {
+        match self {
+            MoveKind::Rapid => 0,
+            MoveKind::Cut => 1,
+            MoveKind::Entry => 2,
+            MoveKind::Plunge => 3,
+            MoveKind::Link => 4,
+            MoveKind::Descend => 5,
+            MoveKind::Finish => 6,
+        }
+    }
+}
+
 /// The shape of a move.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Motion {
@@ -367,6 +386,17 @@ impl Toolpath {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_kinds_code_indexes_its_name() {
+        use MoveKind::*;
+        let all = [Rapid, Cut, Entry, Plunge, Link, Descend, Finish];
+        for k in all {
+            let serde_name = serde_json::to_value(k).unwrap();
+            assert_eq!(serde_name, MoveKind::NAMES[usize::from(k.code())], "{k:?}");
+        }
+        assert_eq!(all.len(), MoveKind::NAMES.len());
+    }
 
     #[test]
     fn arc_geometry_and_lengths() {

@@ -60,7 +60,7 @@ ENGAGEMENT_COLUMNS: Sequence[str] = (
 #: The sample kinds in ``engagement[:, 6]``.
 SAMPLE_KINDS: Sequence[str] = ("lateral", "descending", "plunge")
 #: The move kinds in ``Toolpath.kind``.
-MOVE_KINDS: Sequence[str] = ("rapid", "cut", "entry", "plunge", "link", "descend", "finish")
+MOVE_KINDS: Sequence[str] = tuple(_swarf.MOVE_KINDS)
 
 PathLike = Union[str, "os.PathLike[str]"]
 Progress = Callable[[str, float], Any]

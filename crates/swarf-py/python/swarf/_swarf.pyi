@@ -22,6 +22,7 @@ STRATEGIES: list[str]
 POSTS: list[str]
 OVERRIDES: list[str]
 SETTINGS: list[str]
+MOVE_KINDS: list[str]
 VERSION: str
 
 class SwarfError(Exception):

@@ -799,19 +799,6 @@ pub fn levels_of(tp: &Toolpath) -> (Vec<f64>, Vec<u16>) {
     (levels, of)
 }
 
-/// Move kinds as the page numbers them.
-fn kind_code(k: MoveKind) -> u8 {
-    match k {
-        MoveKind::Rapid => 0,
-        MoveKind::Cut => 1,
-        MoveKind::Entry => 2,
-        MoveKind::Plunge => 3,
-        MoveKind::Link => 4,
-        MoveKind::Descend => 5,
-        MoveKind::Finish => 6,
-    }
-}
-
 /// Flag bits of a packed move beside its kind.
 const ARC: u8 = 0x10;
 const CCW: u8 = 0x20;
@@ -930,7 +917,7 @@ fn pack_program(pk: &mut Pack, key: &str, p: &ProgramView) -> serde_json::Value 
         .moves
         .iter()
         .map(|m| {
-            kind_code(m.kind)
+            m.kind.code()
                 | match m.motion {
                     Motion::Arc { ccw, .. } => ARC | if ccw { CCW } else { 0 },
                     Motion::Line => 0,
