@@ -1045,8 +1045,7 @@ fn demo(dir: &Path, o: &CommonOpts) -> Result<(), Failure> {
         html: Some(dir.join("demo.html")),
         inputs: Vec::new(),
     };
-    let case =
-        OutputFile::new(dir.join("demo_pocket.json"), include_str!("../../swarf/examples_data/demo_pocket.json"));
+    let case = OutputFile::new(dir.join("demo_pocket.json"), swarf::io::EXAMPLE_CASE);
     // (refused before the work, as rough's)
     output::check(&[out.paths(), vec![case.path.as_path()]].concat(), &[])?;
     let res = run(&job, &opts, o.quiet)?;

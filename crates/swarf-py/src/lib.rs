@@ -665,7 +665,7 @@ fn commit(py: Python<'_>, files: &[OutputFile], inputs: &[PathBuf]) -> PyResult<
 }
 
 fn toolpath_arrays<'py>(py: Python<'py>, tp: &swarf::Toolpath) -> PyResult<Bound<'py, pyo3::types::PyTuple>> {
-    use swarf::toolpath::{Motion, MoveKind};
+    use swarf::toolpath::Motion;
     let n = tp.moves.len();
     let (mut xyz, mut kind, mut feed, mut arc, mut centre) = (
         Vec::with_capacity(n * 3),
@@ -850,6 +850,7 @@ fn _swarf(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("OVERRIDES", OVERRIDES.to_vec())?;
     m.add("SETTINGS", SETTINGS.to_vec())?;
     m.add("MOVE_KINDS", swarf::toolpath::MoveKind::NAMES.to_vec())?;
+    m.add("EXAMPLE_CASE", swarf::io::EXAMPLE_CASE)?;
     m.add("VERSION", env!("CARGO_PKG_VERSION"))?;
     errors::register(m)?;
     Ok(())

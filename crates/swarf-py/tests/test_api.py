@@ -38,6 +38,14 @@ def test_rough_is_the_command_lines(case, swarf_bin, tmp_path):
     assert res.report["gouges"] == 0
 
 
+def test_the_built_in_example_needs_no_file():
+    job = swarf.example()
+    assert (job.name, job.kind, job.tool_diameter) == ("demo_pocket", "2.5d", 6)
+    res = swarf.rough(job)
+    assert res.report["gouges"] == 0 and res.report["levels"] == [-3.0, -6.0]
+    assert swarf.example(tool_diameter=8).tool_diameter == 8
+
+
 def test_options_are_the_command_lines(swarf_bin, tmp_path):
     case = EXAMPLES / "cases/pocket_islands.json"
     flags = ["--strategy", "offset", "--tool-diameter", "8", "--engagement", "45", "--post", "grbl", "--conventional"]

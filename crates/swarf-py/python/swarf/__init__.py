@@ -70,6 +70,7 @@ Job = _swarf.Job
 __all__ = [
     "Job",
     "load",
+    "example",
     "rough",
     "check",
     "plan_tools",
@@ -107,6 +108,13 @@ def load(path: PathLike, **overrides: Any) -> Job:
     (a bad override: ``.setting``, ``.reason``), ``OSError`` (an unreadable file).
     """
     return _swarf.load(os.fspath(path), **overrides)
+
+
+def example(**overrides: Any) -> Job:
+    """The built-in example job, as ``swarf demo`` roughs it: a 90 × 60 mm pocket with two
+    islands, a Ø6 mm end mill at 25 % stepover, two levels (no file needed). Keywords override
+    it as in ``load``."""
+    return _swarf.load_case_text(_swarf.EXAMPLE_CASE, "demo_pocket.json", **overrides)
 
 
 def _plain(value: Any) -> Any:

@@ -23,6 +23,7 @@ POSTS: list[str]
 OVERRIDES: list[str]
 SETTINGS: list[str]
 MOVE_KINDS: list[str]
+EXAMPLE_CASE: str
 VERSION: str
 
 class SwarfError(Exception):

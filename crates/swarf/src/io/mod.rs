@@ -333,10 +333,13 @@ pub enum Input {
     Mesh(Box<MeshJob>),
 }
 
-/// The built-in example job (a pocket with two islands).
+/// The built-in example's case file (`demo_pocket.json`): a 90 × 60 mm pocket with two
+/// islands, a Ø6 mm end mill at 25 % stepover, two levels.
+pub const EXAMPLE_CASE: &str = include_str!("../../examples_data/demo_pocket.json");
+
+/// The built-in example job (a pocket with two islands, [`EXAMPLE_CASE`]).
 pub fn example_job() -> Job {
-    let text = include_str!("../../examples_data/demo_pocket.json");
-    match case::parse_case(std::path::Path::new("demo_pocket.json"), text.as_bytes()) {
+    match case::parse_case(std::path::Path::new("demo_pocket.json"), EXAMPLE_CASE.as_bytes()) {
         Ok(j) => j,
         Err(e) => unreachable!("the built-in example is valid: {e}"),
     }
