@@ -851,6 +851,7 @@ fn _swarf(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SETTINGS", SETTINGS.to_vec())?;
     m.add("MOVE_KINDS", swarf::toolpath::MoveKind::NAMES.to_vec())?;
     m.add("EXAMPLE_CASE", swarf::io::EXAMPLE_CASE)?;
+    m.add("DEFAULT_STEPDOWN_FRACTION", swarf::MeshJob::DEFAULT_STEPDOWN_FRACTION)?;
     m.add("VERSION", env!("CARGO_PKG_VERSION"))?;
     errors::register(m)?;
     Ok(())

@@ -8,11 +8,15 @@ with the ``swarf`` package on PYTHONPATH. (``freecadcmd -c`` exits 1 on an uncau
 ``freecadcmd FILE.py`` prints it and exits 0, so the script records what happened in
 ``result.json`` either way and the test reads that.)
 
-The part: a block 100 x 80 x 20 mm, x 0..100, y 0..80, z 0..20 (top at z = 20), with a
-60 x 40 mm pocket of 8 mm corner radius centred on it (x 20..80, y 20..60), 6 mm deep (floor
-z = 14). The job's stock is the model's bounding box with no margins; its tool controller a
-6 mm end mill at 1000 mm/min (FreeCAD holds 16.667 mm/s), 300 mm/min vertical, 10000 rpm,
-tool number 1.
+The part ($SWARF_FC_MODEL, ``pocket`` by default): a block 100 x 80 x 20 mm, x 0..100,
+y 0..80, z 0..20 (top at z = 20), with a 60 x 40 mm pocket of 8 mm corner radius centred on it
+(x 20..80, y 20..60), 6 mm deep (floor z = 14); the job's stock is the model's bounding box with
+no margins. ``island``: a block 120 x 90 x 25 mm with an 80 x 60 mm pocket (10 mm corners)
+10 mm deep (floor z = 15) round a Ø20 mm boss 7 mm high, a shallower Ø15 mm pocket 4 mm deep
+(left as part: a case has one floor) and a drafted pocket (a cone, Ø12 at its floor z = 17 to
+Ø18 at the top); the stock keeps FreeCAD's 1 mm margins, so it is 1 mm above the model's top.
+The tool controller: a 6 mm end mill at 1000 mm/min (FreeCAD holds 16.667 mm/s), 300 mm/min
+vertical, 10000 rpm, tool number 1.
 
 Writes into $SWARF_FC_OUT: ``posted.ngc`` (the job posted by ``linuxcnc_post`` with
 ``--no-show-editor``), ``case.json`` (what ``swarf.freecad.case_from_job`` built), ``report.json``
@@ -27,6 +31,7 @@ import traceback
 
 T0 = time.time()
 OUT = os.environ["SWARF_FC_OUT"]
+MODEL = os.environ.get("SWARF_FC_MODEL", "pocket")
 result = {"ok": False, "stage": "start"}
 
 
@@ -42,12 +47,24 @@ def _run():
     result["freecad_version"] = ".".join(FreeCAD.Version()[:3])
     result["stage"] = "model"
     doc = FreeCAD.newDocument("SwarfFreeCADTest")
-    block = Part.makeBox(100, 80, 20)
-    cutter = Part.makeBox(60, 40, 10, FreeCAD.Vector(20, 20, 14))
-    vertical = [e for e in cutter.Edges if abs(e.Vertexes[0].Z - e.Vertexes[1].Z) > 1e-6]
-    cutter = cutter.makeFillet(8.0, vertical)
+    island = MODEL == "island"
+    if island:
+        block = Part.makeBox(120, 90, 25)
+        cutter = Part.makeBox(80, 60, 10, FreeCAD.Vector(20, 15, 15))
+        vertical = [e for e in cutter.Edges if abs(e.Vertexes[0].Z - e.Vertexes[1].Z) > 1e-6]
+        cutter = cutter.makeFillet(10.0, vertical)
+        boss = Part.makeCylinder(10, 7, FreeCAD.Vector(60, 45, 15))
+        shallow = Part.makeCylinder(7.5, 4, FreeCAD.Vector(10, 10, 21))
+        drafted = Part.makeCone(6, 9, 8, FreeCAD.Vector(108, 78, 17))
+        shape = block.cut(cutter).fuse(boss).cut(shallow).cut(drafted).removeSplitter()
+    else:
+        block = Part.makeBox(100, 80, 20)
+        cutter = Part.makeBox(60, 40, 10, FreeCAD.Vector(20, 20, 14))
+        vertical = [e for e in cutter.Edges if abs(e.Vertexes[0].Z - e.Vertexes[1].Z) > 1e-6]
+        cutter = cutter.makeFillet(8.0, vertical)
+        shape = block.cut(cutter)
     model = doc.addObject("Part::Feature", "PocketBlock")
-    model.Shape = block.cut(cutter)
+    model.Shape = shape
     doc.recompute()
 
     result["stage"] = "job"
@@ -56,7 +73,7 @@ def _run():
 
     job = PathJob.Create("Job", [model])
     for k in ("ExtXneg", "ExtXpos", "ExtYneg", "ExtYpos", "ExtZneg", "ExtZpos"):
-        if hasattr(job.Stock, k):
+        if hasattr(job.Stock, k) and not island:  # (the island job keeps FreeCAD's 1 mm margins)
             setattr(job.Stock, k, 0.0)
     if not job.Tools.Group:
         job.Proxy.addToolController(PathToolController.Create())

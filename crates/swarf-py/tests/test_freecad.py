@@ -39,9 +39,20 @@ def _tool(name, require_env, what, *others):
 
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
-    """Runs freecad_job.py in freecadcmd once; returns its output folder and result."""
+    """Runs freecad_job.py in freecadcmd once (the pocketed block); returns its output folder
+    and result."""
+    return _freecad_job(tmp_path_factory, "pocket")
+
+
+@pytest.fixture(scope="module")
+def run_island(tmp_path_factory):
+    """freecad_job.py's second job: a pocket round an island, in FreeCAD's default stock."""
+    return _freecad_job(tmp_path_factory, "island")
+
+
+def _freecad_job(tmp_path_factory, model):
     freecadcmd = _tool("freecadcmd", "SWARF_REQUIRE_FREECAD", "FreeCAD's headless command line", "FreeCADCmd")
-    base = tmp_path_factory.mktemp("freecad")
+    base = tmp_path_factory.mktemp("freecad_" + model)
     pkg = base / "pkg"
     # only the swarf package, not the test interpreter's whole site-packages
     shutil.copytree(
@@ -52,7 +63,9 @@ def run(tmp_path_factory):
     out.mkdir()
     home.mkdir()
     env = {k: v for k, v in os.environ.items() if not k.startswith("PYTHON") and k != "VIRTUAL_ENV"}
-    env.update(PYTHONPATH=str(pkg), SWARF_FC_OUT=str(out), HOME=str(home), PYTHONDONTWRITEBYTECODE="1")
+    env.update(
+        PYTHONPATH=str(pkg), SWARF_FC_OUT=str(out), SWARF_FC_MODEL=model, HOME=str(home), PYTHONDONTWRITEBYTECODE="1"
+    )
     proc = subprocess.run(
         [freecadcmd, "-c", "exec(open(%r).read())" % str(SCRIPT)],
         cwd=str(base),
@@ -83,6 +96,7 @@ def run(tmp_path_factory):
         "own": own,
         "posted": (out / "posted.ngc").read_text(),
         "fc_report": json.loads((out / "report.json").read_text()),
+        "log": log,
     }
 
 
@@ -292,3 +306,25 @@ def test_swarfs_figures_for_the_posted_program(run):
         assert _close(r["cut_length_mm"], own["cut_length_mm"]), (name, r["cut_length_mm"], own["cut_length_mm"])
         assert r["gouges"] == 0, (name, r["gouges"])
     assert own["gouges"] == 0
+
+
+def test_a_pocket_round_an_island_in_freecads_default_stock(run_island, tmp_path):
+    """FreeCAD's default stock is 1 mm bigger than the model on every side, top included: the
+    case keeps the part up to the stock's top (that layer is not faced, and a warning says so),
+    the pocket is cleared round the boss in levels of one tool diameter, and the posted program
+    is swarf's own, with no gouge into the boss, the drafted pocket's leaning wall or the
+    shallow pocket's rim."""
+    r = run_island
+    c = r["case"]
+    assert (c["stock_top"], c["part_top"], c["floor"], c["stepdown"]) == (26.0, 26.0, 15.0, 6.0)
+    assert c["stock"] == [[-1.0, -1.0], [121.0, -1.0], [121.0, 91.0], [-1.0, 91.0]]
+    assert "are not faced by this operation" in r["log"]
+    own = r["own"].report
+    assert own["levels"] == [20.5, 15.0]
+    assert own["gouges"] == 0 and own["rest_fraction"] < 0.001
+    posted = swarf.check(r["job"], r["posted"])
+    assert posted["gouges"] == 0 and posted["rapid_collisions"] == 0
+    assert _close(posted["time_min"], own["time_min"]) and _close(posted["cut_length_mm"], own["cut_length_mm"])
+    rs274 = _tool("rs274", "SWARF_REQUIRE_RS274", "LinuxCNC's G-code interpreter")
+    length, _, arcs, _ = _interpret(rs274, r["out"] / "posted.ngc", tmp_path / "rs274")
+    assert arcs > 0 and _close(length, own["cut_length_mm"], 0.005), (length, own["cut_length_mm"])

@@ -24,6 +24,7 @@ OVERRIDES: list[str]
 SETTINGS: list[str]
 MOVE_KINDS: list[str]
 EXAMPLE_CASE: str
+DEFAULT_STEPDOWN_FRACTION: float
 VERSION: str
 
 class SwarfError(Exception):

@@ -135,7 +135,9 @@ def case_from_job(
       straight edges give their end points, curved ones are discretized within ``deflection``
       mm. The part is the same at every level (2.5D), so a wall that leans or has a fillet is
       taken at its widest, which leaves stock on it rather than gouging it. Stock outside the models (a stock with margins) is cleared
-      down to the floor too. ``part_top``: the top of the models.
+      down to the floor too. ``part_top``: the top of the models, or the stock's where the
+      stock is higher: a 2.5D case keeps the part's outline at every level, so the stock above
+      the models' top is not faced (a warning says so; FreeCAD's Face operation does that).
     - ``floor``: the depth to clear to. Unless given, the z of the deepest upward-facing
       horizontal planar face of the models below their top (a pocket's floor); without one (a
       through pocket, or a model without pockets) the models' bottom. A case has one floor:
@@ -150,8 +152,10 @@ def case_from_job(
       (otherwise swarf's default holds). ``VertFeed`` has no counterpart in swarf: its entries
       are helices and ramps at the cutting feed.
     - ``units``: ``"mm"`` (FreeCAD's internal unit, whatever its display units).
-    - ``engagement_deg``, ``stepover`` (fraction of the diameter), ``stepdown`` (mm) and
-      ``allowance`` (mm) when given.
+    - ``stepdown`` (mm): as given, or one tool diameter (swarf's default for a part read on its
+      own, ``DEFAULT_STEPDOWN_FRACTION`` of the diameter).
+    - ``engagement_deg``, ``stepover`` (fraction of the diameter) and ``allowance`` (mm) when
+      given.
 
     Raises ValueError when the job has no model or tool controller, when the floor is not below
     the stock's top, or when there is nothing to cut (the models cover the stock and reach its
@@ -219,6 +223,15 @@ def case_from_job(
             % (job.Label, floor)
         )
 
+    if stock_top > part_top + 1e-6:
+        # a 2.5D case keeps the part's outline at every level: the stock above the models' top is
+        # not faced (FreeCAD's Face operation does that), and the case says so by putting the
+        # part's top at the stock's, so that no one counts that layer as material left behind
+        FreeCAD.Console.PrintWarning(
+            "swarf: the stock's top (z %.4g mm) is above the model's (z %.4g mm): the %.4g mm between are "
+            "not faced by this operation; face them first (Path Face)\n"
+            % (stock_top, part_top, stock_top - part_top)
+        )
     tcs = list(getattr(job.Tools, "Group", [])) if getattr(job, "Tools", None) else []
     if not tcs:
         raise ValueError("the job %r has no tool controller (Job.Tools.Group is empty)" % job.Label)
@@ -238,7 +251,7 @@ def case_from_job(
         "stock": stock,
         "stock_top": stock_top,
         "part": part,
-        "part_top": part_top,
+        "part_top": max(part_top, stock_top),
         "floor": floor,
         "tool": {"diameter": diameter, "type": "flat"},
     }
@@ -258,8 +271,12 @@ def case_from_job(
         case["engagement_deg"] = float(engagement_deg)
     if stepover is not None:
         case["stepover"] = float(stepover)
-    if stepdown is not None:
-        case["stepdown"] = float(stepdown)
+    if stepdown is None:
+        # (as swarf's own default for a part read on its own: one tool diameter a level)
+        from swarf._swarf import DEFAULT_STEPDOWN_FRACTION
+
+        stepdown = DEFAULT_STEPDOWN_FRACTION * diameter
+    case["stepdown"] = float(stepdown)
     if allowance is not None:
         case["allowance"] = float(allowance)
     return case
