@@ -516,7 +516,7 @@ fn library_defaults() -> Vec<(&'static str, &'static str, String)> {
             (cmd, "spindle", format!("{} for drawings and STL parts", num(swarf::model::Cutting::DEFAULT.spindle_rpm))),
             (cmd, "max_feed", "the rapid rate".to_string()),
             (cmd, "post", Post::DEFAULT.name().to_string()),
-            (cmd, "order", order_name(swarf::strategy::OffsetOptions::DEFAULT.order).to_string()),
+            (cmd, "order", swarf::strategy::OffsetOptions::DEFAULT.order.name().to_string()),
             (cmd, "angle", num(swarf::strategy::ZigzagOptions::DEFAULT.angle_deg)),
             (cmd, "stock_to_leave", num(l.stock_to_leave)),
             (cmd, "ramp_angle", num(l.ramp_angle_deg)),
@@ -532,7 +532,7 @@ fn library_defaults() -> Vec<(&'static str, &'static str, String)> {
         ]);
     }
     v.extend([
-        ("plan", "decomposition", decomposition_name(seq.decomposition).to_string()),
+        ("plan", "decomposition", seq.decomposition.name().to_string()),
         ("plan", "post", Post::DEFAULT.name().to_string()),
         ("plan", "ramp_angle", num(seq.ramp_deg)),
         ("plan", "clearance", num(seq.clearance)),
@@ -540,22 +540,6 @@ fn library_defaults() -> Vec<(&'static str, &'static str, String)> {
         ("plan", "stock_above", num(o.stock_above)),
     ]);
     v
-}
-
-/// The flag's name of an offset order.
-fn order_name(o: OffsetOrder) -> &'static str {
-    match o {
-        OffsetOrder::InsideOut => "inside-out",
-        OffsetOrder::OutsideIn => "outside-in",
-    }
-}
-
-/// The flag's name of a decomposition.
-fn decomposition_name(d: Decomposition) -> &'static str {
-    match d {
-        Decomposition::Trim => "trim",
-        Decomposition::Regions => "regions",
-    }
 }
 
 /// The command with the library's defaults in the help of the options that have one.
@@ -743,9 +727,13 @@ fn settings(o: &CommonOpts) -> Result<swarf::Settings, Failure> {
         strategy: o.strategy.clone(),
         post: o.post.clone(),
         conventional: o.conventional,
-        order: o.order.map(|x| match x {
-            OrderArg::InsideOut => "inside-out".to_string(),
-            OrderArg::OutsideIn => "outside-in".to_string(),
+        order: o.order.map(|x| {
+            match x {
+                OrderArg::InsideOut => OffsetOrder::InsideOut,
+                OrderArg::OutsideIn => OffsetOrder::OutsideIn,
+            }
+            .name()
+            .to_string()
         }),
         angle: o.angle,
         stock_to_leave: o.stock_to_leave,
@@ -1077,10 +1065,11 @@ fn plan(a: PlanArgs) -> Result<(), Failure> {
     output::check(&early, &inputs)?;
     let opts = swarf::Settings {
         decomposition: a.decomposition.map(|d| {
-            decomposition_name(match d {
+            match d {
                 DecompositionArg::Trim => Decomposition::Trim,
                 DecompositionArg::Regions => Decomposition::Regions,
-            })
+            }
+            .name()
             .to_string()
         }),
         exhaustive: a.exhaustive,

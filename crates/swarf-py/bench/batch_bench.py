@@ -29,12 +29,10 @@ ROOT = pathlib.Path(__file__).resolve().parents[3]
 def jobs(n):
     cases = sorted((ROOT / "examples/cases").glob("*.json"))
     out = []
-    k = 0
     for d in (4, 5, 6, 8):
         for e in (40, 50, 60, 70):
             for c in cases:
                 out.append({"input": str(c), "name": f"{c.stem}_D{d}_E{e}", "tool_diameter": d, "engagement": e})
-                k += 1
     if n > len(out):
         sys.exit(f"at most {len(out)} jobs")
     return out[:n]
@@ -44,7 +42,7 @@ def same(a, b):
     names = sorted(os.listdir(a))
     if names != sorted(os.listdir(b)):
         return False
-    match, mismatch, errors = filecmp.cmpfiles(a, b, names, shallow=False)
+    _, mismatch, errors = filecmp.cmpfiles(a, b, names, shallow=False)
     return not mismatch and not errors
 
 

@@ -41,12 +41,18 @@ struct PyJob {
     source: Source,
     overrides: Overrides,
     /// The overrides as given, to merge with later ones.
-    given: Vec<(String, Py<PyAny>)>,
+    given: Keywords,
 }
 
 impl PyJob {
-    fn read(py: Python<'_>, source: Source, kw: Vec<(String, Py<PyAny>)>) -> PyResult<PyJob> {
+    /// Reads `source` with the overrides `kw` names (an unknown one is a `TypeError`).
+    fn read(py: Python<'_>, source: Source, kw: Keywords) -> PyResult<PyJob> {
         let overrides = overrides_of(py, &kw)?;
+        PyJob::read_with(py, source, kw, overrides)
+    }
+
+    /// Reads `source` with `overrides`, which `kw` gave.
+    fn read_with(py: Python<'_>, source: Source, kw: Keywords, overrides: Overrides) -> PyResult<PyJob> {
         let src = source.clone();
         let ov = overrides.clone();
         let (input, reading) = py
@@ -72,11 +78,11 @@ impl PyJob {
     }
 
     /// The job again with `kw` on top of its own overrides (the job itself when none).
-    fn with(&self, py: Python<'_>, kw: Vec<(String, Py<PyAny>)>) -> PyResult<Option<PyJob>> {
+    fn with(&self, py: Python<'_>, kw: Keywords) -> PyResult<Option<PyJob>> {
         if kw.is_empty() {
             return Ok(None);
         }
-        let mut all: Vec<(String, Py<PyAny>)> = self.given.iter().map(|(k, v)| (k.clone(), v.clone_ref(py))).collect();
+        let mut all: Keywords = self.given.iter().map(|(k, v)| (k.clone(), v.clone_ref(py))).collect();
         for (k, v) in kw {
             all.retain(|(a, _)| *a != k);
             all.push((k, v));
@@ -318,7 +324,7 @@ fn settings_of(py: Python<'_>, kw: &[(String, Py<PyAny>)]) -> PyResult<Settings>
     Ok(s)
 }
 
-fn pairs(kw: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, Py<PyAny>)>> {
+fn pairs(kw: Option<&Bound<'_, PyDict>>) -> PyResult<Keywords> {
     let mut v = Vec::new();
     if let Some(d) = kw {
         for (k, val) in d.iter() {
@@ -459,11 +465,8 @@ impl PyJob {
         kw: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<PyJob> {
         let kw = pairs(kw)?;
-        for (k, _) in &kw {
-            if !OVERRIDES.contains(&k.as_str()) {
-                return Err(unknown(k));
-            }
-        }
+        // (a bad keyword before the mesh's arrays are read)
+        let overrides = overrides_of(py, &kw)?;
         let np = py.import("numpy")?;
         let v = np.call_method1("ascontiguousarray", (vertices, "float64"))?;
         let t = np.call_method1("ascontiguousarray", (triangles, "int64"))?;
@@ -502,7 +505,7 @@ impl PyJob {
             tris.push(t);
         }
         let mesh = swarf::io::stl::from_triangles(&path, &verts, &tris).map_err(|e| to_py(py, e))?;
-        PyJob::read(py, Source::Mesh { path, mesh }, kw)
+        PyJob::read_with(py, Source::Mesh { path, mesh }, kw, overrides)
     }
 
     fn __repr__(&self) -> String {
@@ -515,13 +518,7 @@ impl PyJob {
 #[pyfunction]
 #[pyo3(signature = (path, **kw))]
 fn load(py: Python<'_>, path: PathBuf, kw: Option<&Bound<'_, PyDict>>) -> PyResult<PyJob> {
-    let kw = pairs(kw)?;
-    for (k, _) in &kw {
-        if !OVERRIDES.contains(&k.as_str()) {
-            return Err(unknown(k));
-        }
-    }
-    PyJob::read(py, Source::File(path), kw)
+    PyJob::read(py, Source::File(path), pairs(kw)?)
 }
 
 /// Reads a case held in memory (its JSON text); `path` names it in errors and locates a 3D
@@ -529,13 +526,7 @@ fn load(py: Python<'_>, path: PathBuf, kw: Option<&Bound<'_, PyDict>>) -> PyResu
 #[pyfunction]
 #[pyo3(signature = (text, path, **kw))]
 fn load_case_text(py: Python<'_>, text: &str, path: PathBuf, kw: Option<&Bound<'_, PyDict>>) -> PyResult<PyJob> {
-    let kw = pairs(kw)?;
-    for (k, _) in &kw {
-        if !OVERRIDES.contains(&k.as_str()) {
-            return Err(unknown(k));
-        }
-    }
-    PyJob::read(py, Source::Case { path, text: text.as_bytes().to_vec() }, kw)
+    PyJob::read(py, Source::Case { path, text: text.as_bytes().to_vec() }, pairs(kw)?)
 }
 
 /// A progress callback called from swarf's threads: at most every 1 % of a stage (and at each

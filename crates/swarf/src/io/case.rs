@@ -156,18 +156,8 @@ pub fn parse_case(path: &Path, bytes: &[u8]) -> Result<Job> {
     }
 }
 
-/// Reads a case file of either kind.
-pub fn read_input(path: &Path) -> Result<Input> {
-    let text = std::fs::read(path).map_err(|e| Error::input(path, "file", format!("cannot read: {e}")))?;
-    parse_input(path, &text)
-}
-
-/// The STL file a 3D case at `path` names (`part_stl`, relative to the case), if it names one.
-pub fn part_stl_of(path: &Path) -> Option<PathBuf> {
-    part_stl_of_bytes(path, &std::fs::read(path).ok()?)
-}
-
-/// The STL file the 3D case `bytes` (at `path`) names, if it names one.
+/// The STL file the 3D case `bytes` (at `path`) names (`part_stl`, relative to the case), if
+/// it names one.
 pub fn part_stl_of_bytes(path: &Path, bytes: &[u8]) -> Option<PathBuf> {
     let root: Value = serde_json::from_slice(bytes).ok()?;
     let stl = root.get("part_stl")?.as_str()?;

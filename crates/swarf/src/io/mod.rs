@@ -391,11 +391,15 @@ pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let is_stl = ext == "stl" || (ext != "json" && ext != "dxf" && ext != "svg" && sniff_stl(path));
     let is_case = !is_stl && (ext == "json" || (ext != "dxf" && ext != "svg" && sniff_json(path)));
+    // (the STL a 3D case names, found in the bytes read once)
+    let mut case_stl = None;
     let input = if is_stl {
         stl_input(path, stl::read(path)?, ov, &mut reading)?
     } else if is_case {
-        let input = case::read_input(path)?;
+        let bytes = std::fs::read(path).map_err(|e| Error::input(path, "file", format!("cannot read: {e}")))?;
+        let input = case::parse_input(path, &bytes)?;
         case_reading(&input, &mut reading);
+        case_stl = case::part_stl_of_bytes(path, &bytes);
         input
     } else {
         let d = swarf_import::read_drawing(path, &ov.import)?;
@@ -417,9 +421,7 @@ pub fn read_input(path: &Path, ov: &Overrides) -> Result<(Input, Reading)> {
     };
     let input = overridden(input, ov, path)?;
     reading.files.push(path.to_path_buf());
-    if is_case {
-        reading.files.extend(case::part_stl_of(path));
-    }
+    reading.files.extend(case_stl);
     Ok((input, reading))
 }
 

@@ -165,7 +165,7 @@ pub fn prove(job: &Job, tp: &crate::toolpath::Toolpath, opts: &RoughOptions) -> 
     opts.validate()?;
     let t0 = Instant::now();
     let d = job.cutting.tool.diameter;
-    let sim = job.stock.bounds().and_then(|(lo, hi)| opts.sim.fitted(d, lo, hi)).unwrap_or_else(|| opts.sim.clone());
+    let sim = opts.sim.fitted_to(d, job.stock.bounds());
     let regions = job.regions(job.radius(), 0.0)?;
     let (rp, rest) = crate::sim::simulate(&job, &regions, &sim, tp, &mut |_| {})?;
     let c = &job.cutting;

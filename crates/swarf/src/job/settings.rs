@@ -72,22 +72,14 @@ pub struct Settings {
     pub exhaustive: bool,
 }
 
-/// An offset order by its name on the command line.
+/// An offset order by its name ([`OffsetOrder::name`]).
 pub fn order_of(name: &str) -> Option<OffsetOrder> {
-    match name {
-        "inside-out" => Some(OffsetOrder::InsideOut),
-        "outside-in" => Some(OffsetOrder::OutsideIn),
-        _ => None,
-    }
+    OffsetOrder::ALL.into_iter().find(|o| o.name() == name)
 }
 
-/// A decomposition by its name on the command line.
+/// A decomposition by its name ([`Decomposition::name`]).
 pub fn decomposition_of(name: &str) -> Option<Decomposition> {
-    match name {
-        "trim" => Some(Decomposition::Trim),
-        "regions" => Some(Decomposition::Regions),
-        _ => None,
-    }
+    Decomposition::ALL.into_iter().find(|d| d.name() == name)
 }
 
 impl Settings {

@@ -249,6 +249,12 @@ impl SimOptions {
         );
         Some(SimOptions { res: Some(res), ..self.clone() })
     }
+
+    /// [`SimOptions::fitted`] to a stock spanning `span` (when it has one), or the options as
+    /// they are: the settings a program on that stock is proven with.
+    pub fn fitted_to(&self, d: f64, span: Option<(geom::DVec2, geom::DVec2)>) -> SimOptions {
+        span.and_then(|(lo, hi)| self.fitted(d, lo, hi)).unwrap_or_else(|| self.clone())
+    }
 }
 
 #[cfg(test)]

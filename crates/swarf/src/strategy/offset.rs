@@ -26,6 +26,19 @@ pub enum OffsetOrder {
     OutsideIn,
 }
 
+impl OffsetOrder {
+    /// Both orders.
+    pub const ALL: [OffsetOrder; 2] = [OffsetOrder::InsideOut, OffsetOrder::OutsideIn];
+
+    /// Its name (the command line's `--order`, the Python keyword's value).
+    pub const fn name(self) -> &'static str {
+        match self {
+            OffsetOrder::InsideOut => "inside-out",
+            OffsetOrder::OutsideIn => "outside-in",
+        }
+    }
+}
+
 /// The offset strategy's options.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OffsetOptions {

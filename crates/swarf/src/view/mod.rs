@@ -371,7 +371,7 @@ impl ProgramView {
 /// removed volume read along the program, fixtures as solids.
 pub fn of_rough(job: &Job, res: &RoughResult, sim: &SimOptions) -> Result<Scene> {
     let sim =
-        proof_cells(sim, &res.report).unwrap_or_else(|| fitted(sim, job.cutting.tool.diameter, job.stock.bounds()));
+        proof_cells(sim, &res.report).unwrap_or_else(|| sim.fitted_to(job.cutting.tool.diameter, job.stock.bounds()));
     let regions = job.regions(job.radius(), 0.0)?;
     Ok(proven(RasterSim::new(job, &regions, &sim)?, job.floor, res, fixtures_of(job)))
 }
@@ -380,7 +380,7 @@ pub fn of_rough(job: &Job, res: &RoughResult, sim: &SimOptions) -> Result<Scene>
 /// stock field of the mesh model.
 pub fn of_mesh_rough(job: &MeshJob, res: &RoughResult, sim: &SimOptions) -> Result<Scene> {
     let sim = proof_cells(sim, &res.report).unwrap_or_else(|| {
-        fitted(sim, job.cutting.tool.diameter, Some((job.stock_lo.truncate(), job.stock_hi.truncate())))
+        sim.fitted_to(job.cutting.tool.diameter, Some((job.stock_lo.truncate(), job.stock_hi.truncate())))
     });
     let solids = vec![Solid::Mesh { kind: "part", tris: job.mesh.tris.clone() }];
     Ok(proven(crate::sim::heights::mesh_model(job, &sim)?, job.floor, res, solids))
@@ -620,7 +620,7 @@ pub fn of_programs(job: Against<'_>, programs: Vec<ReadProgram>, sim: &SimOption
         Against::Flat(j) => j.stock.bounds(),
         Against::Mesh(j) => Some((j.stock_lo.truncate(), j.stock_hi.truncate())),
     };
-    let sim_for = |t: &crate::model::Tool| fitted(sim, t.diameter, span);
+    let sim_for = |t: &crate::model::Tool| sim.fitted_to(t.diameter, span);
     let how = Chain {
         job,
         sim: &sim_for,
@@ -745,11 +745,6 @@ pub fn of_five(job: &crate::model::five::FiveJob, prog: &crate::job::five::FiveP
 /// `sim` with the cell the proof of `report` used (none when it was not proven).
 fn proof_cells(sim: &SimOptions, report: &Report) -> Option<SimOptions> {
     (report.simulated && report.sim_res_mm > 0.0).then(|| SimOptions { res: Some(report.sim_res_mm), ..sim.clone() })
-}
-
-/// `sim` with its cell fitted to a stock spanning `span`, as the proof fits it.
-fn fitted(sim: &SimOptions, d: f64, span: Option<(DVec2, DVec2)>) -> SimOptions {
-    span.and_then(|(lo, hi)| sim.fitted(d, lo, hi)).unwrap_or_else(|| sim.clone())
 }
 
 /// The levels of a program — the heights of its horizontal cuts, highest first — and the level

@@ -67,6 +67,19 @@ pub enum Decomposition {
     Regions,
 }
 
+impl Decomposition {
+    /// Both decompositions.
+    pub const ALL: [Decomposition; 2] = [Decomposition::Trim, Decomposition::Regions];
+
+    /// Its name (the command line's `--decomposition`, the Python keyword's value).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Decomposition::Trim => "trim",
+            Decomposition::Regions => "regions",
+        }
+    }
+}
+
 /// Options of the search.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SeqOptions {
