@@ -281,12 +281,31 @@ pub struct Planned {
 /// Plans the program of a 2.5D job (no posting, no simulation), or `None` when a strategy that
 /// works from passes finds none.
 pub fn plan(job: &Job, opts: &RoughOptions) -> Result<Option<Planned>> {
+    let (regions, geom) = geometry(job, opts)?;
+    plan_on(job, opts, regions, &geom)
+}
+
+/// The regions and the level geometry [`plan`] plans `job` on (they depend on the job, the
+/// strategy's wall margin and the link options only, not on the material).
+pub(crate) fn geometry(job: &Job, opts: &RoughOptions) -> Result<(crate::model::Regions, LayerGeom)> {
     let t0 = Instant::now();
     let margin = opts.strategy.wall_margin(&opts.link);
     let regions = job.regions(job.radius(), margin)?;
     log::debug!("regions {:.3} s", t0.elapsed().as_secs_f64());
     let geom = LayerGeom::new(job, &regions, &opts.link, margin)?;
     log::debug!("layer geometry {:.3} s", t0.elapsed().as_secs_f64());
+    Ok((regions, geom))
+}
+
+/// [`plan`] on the job's [`geometry`].
+pub(crate) fn plan_on(
+    job: &Job,
+    opts: &RoughOptions,
+    regions: crate::model::Regions,
+    geom: &LayerGeom,
+) -> Result<Option<Planned>> {
+    let t0 = Instant::now();
+    let margin = opts.strategy.wall_margin(&opts.link);
     let zs = job.levels();
     let finish: Vec<(f64, Vec<Pass>)> = if opts.link.finish {
         let fp = strategy::finish_passes(job, &regions, &opts.link, margin);
@@ -294,8 +313,7 @@ pub fn plan(job: &Job, opts: &RoughOptions) -> Result<Option<Planned>> {
     } else {
         Vec::new()
     };
-    let cx =
-        Context { job, regions: &regions, geom: &geom, link: &opts.link, sim: &opts.sim, zs: &zs, finish: &finish };
+    let cx = Context { job, regions: &regions, geom, link: &opts.link, sim: &opts.sim, zs: &zs, finish: &finish };
     let Some(program) = opts.strategy.plan(&cx)? else { return Ok(None) };
     log::debug!("planned in {:.3} s", t0.elapsed().as_secs_f64());
     Ok(Some(Planned {

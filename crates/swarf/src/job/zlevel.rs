@@ -28,69 +28,100 @@ pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -
     opts.validate()?;
     let t0 = Instant::now();
     let zs = job.levels();
-    let mut shadows = crate::geom::mesh::Shadows::new(&job.mesh);
     let mut state = crate::sim::heights::mesh_model(job, &opts.sim)?;
     // (heights only: no engagement is measured on it)
     state.track_exact = false;
     let safe_z = job.top() + opts.link.clearance;
+    let mut strategy = opts.strategy.clone();
+    let wall_contours = strategy.adaptive_mut().is_some();
+    if let Some(a) = strategy.adaptive_mut() {
+        // (the slivers the fillets and a cell-sized model leave stack into walls a whole
+        // depth tall over the levels)
+        a.corner_fillets = false;
+        a.full_wall_contour = true;
+    }
+    let level_opts = RoughOptions { strategy, ..opts.clone() };
+    let cell = state.grid.res;
     let mut levels: Vec<(f64, Toolpath)> = Vec::new();
     let mut keeps = super::zorder::Keeps::new(job.top());
     let mut done = Vec::new();
-    for (i, &z) in zs.iter().enumerate() {
-        progress(i as f64 / zs.len() as f64);
-        log::info!("z-level {} of {}: z {z:.3}", i + 1, zs.len());
-        let ts = Instant::now();
-        let shadow = shadows.down_to(z - job.allowance_floor);
-        let t_shadow = ts.elapsed().as_secs_f64();
-        let keep = keep_of(shadow, job.allowance);
-        log::trace!(
-            "shadow at z {z:.3}: {} vertices in {t_shadow:.3} s, keep {} vertices ({} rings) in {:.3} s",
-            shadow.vertex_count(),
-            keep.vertex_count(),
-            keep.rings().count(),
-            ts.elapsed().as_secs_f64() - t_shadow
-        );
-        keeps.push(z, &keep, job.radius());
-        let lj = job.level_job(&keep, z);
-        // the level is planned on what the levels above left
-        let heights = HeightMap { grid: state.grid, stock: state.heights().to_vec(), part: None };
-        let mut lopts = RoughOptions {
-            // (rapids at depth cross whole levels of cleared stock: checked against the
-            // surely cut heights)
-            sim: SimOptions { heights: Some(Arc::new(heights)), sure_links: true, ..opts.sim.clone() },
-            ..opts.clone()
-        };
-        if let Some(a) = lopts.strategy.adaptive_mut() {
-            // (the slivers the fillets and a cell-sized model leave stack into walls a whole
-            // depth tall over the levels)
-            a.corner_fillets = false;
-            a.full_wall_contour = true;
+    std::thread::scope(|scope| -> Result<()> {
+        // Each level's geometry (the shadow, the level's job, its regions and the offsets of
+        // its clean-up) does not depend on the material, only the planning does: it is made a
+        // level or two ahead on a thread of its own, while the planner cuts the level above.
+        // The same geometry in the same order, so the same program.
+        let (tx, rx) = std::sync::mpsc::sync_channel(1);
+        let (zs, level_opts) = (&zs, &level_opts);
+        scope.spawn(move || {
+            let mut shadows = crate::geom::mesh::Shadows::new(&job.mesh);
+            for &z in zs {
+                let ts = Instant::now();
+                let shadow = shadows.down_to(z - job.allowance_floor);
+                let t_shadow = ts.elapsed().as_secs_f64();
+                let keep = keep_of(shadow, job.allowance);
+                log::trace!(
+                    "shadow at z {z:.3}: {} vertices in {t_shadow:.3} s, keep {} vertices ({} rings) in {:.3} s",
+                    shadow.vertex_count(),
+                    keep.vertex_count(),
+                    keep.rings().count(),
+                    ts.elapsed().as_secs_f64() - t_shadow
+                );
+                let lj = job.level_job(&keep, z);
+                let geometry = super::rough::geometry(&lj, level_opts);
+                if let Ok((_, g)) = &geometry
+                    && wall_contours
+                {
+                    // (the zone of the clean-up's wall contour, see cleanup::passes_for_leftover)
+                    g.centres_grown(g.r + cell);
+                }
+                // (the planner stopped: an error)
+                if tx.send((z, keep, lj, geometry)).is_err() {
+                    break;
+                }
+            }
+        });
+        for (i, (z, keep, lj, geometry)) in rx.iter().enumerate() {
+            progress(i as f64 / zs.len() as f64);
+            log::info!("z-level {} of {}: z {z:.3}", i + 1, zs.len());
+            keeps.push(z, &keep, job.radius());
+            // the level is planned on what the levels above left
+            let heights = HeightMap { grid: state.grid, stock: state.heights().to_vec(), part: None };
+            let lopts = RoughOptions {
+                // (rapids at depth cross whole levels of cleared stock: checked against the
+                // surely cut heights)
+                sim: SimOptions { heights: Some(Arc::new(heights)), sure_links: true, ..level_opts.sim.clone() },
+                ..level_opts.clone()
+            };
+            let planned = geometry.and_then(|(regions, geom)| super::rough::plan_on(&lj, &lopts, regions, &geom));
+            let planned = match planned {
+                Ok(p) => p,
+                // a level with nothing the tool can reach
+                Err(Error::Job { .. }) if lj.regions(job.radius(), 0.0).map_or(true, |r| r.reachable.is_empty()) => {
+                    None
+                }
+                Err(e) => return Err(e),
+            };
+            let Some(p) = planned else { continue };
+            let mut tp = p.toolpath;
+            // (each level's program ends with its retract to the safe height, where the next
+            // level's travel starts)
+            tp.notes.retain(|n| !n.text.starts_with("level ") && !n.text.starts_with("end:"));
+            log::debug!(
+                "z-level {} of {} at z {z:.3}: {} moves, {:.2} s",
+                i + 1,
+                zs.len(),
+                tp.moves.len(),
+                t0.elapsed().as_secs_f64()
+            );
+            if tp.moves.iter().all(|m| m.is_rapid()) {
+                continue;
+            }
+            state.cut_moves(tp.start, &tp.moves);
+            done.push(z);
+            levels.push((z, tp));
         }
-        let planned = match super::rough::plan(&lj, &lopts) {
-            Ok(p) => p,
-            // a level with nothing the tool can reach
-            Err(Error::Job { .. }) if lj.regions(job.radius(), 0.0).map_or(true, |r| r.reachable.is_empty()) => None,
-            Err(e) => return Err(e),
-        };
-        let Some(p) = planned else { continue };
-        let mut tp = p.toolpath;
-        // (each level's program ends with its retract to the safe height, where the next
-        // level's travel starts)
-        tp.notes.retain(|n| !n.text.starts_with("level ") && !n.text.starts_with("end:"));
-        log::debug!(
-            "z-level {} of {} at z {z:.3}: {} moves, {:.2} s",
-            i + 1,
-            zs.len(),
-            tp.moves.len(),
-            t0.elapsed().as_secs_f64()
-        );
-        if tp.moves.iter().all(|m| m.is_rapid()) {
-            continue;
-        }
-        state.cut_moves(tp.start, &tp.moves);
-        done.push(z);
-        levels.push((z, tp));
-    }
+        Ok(())
+    })?;
     progress(1.0);
     // the pieces of the levels in order, region by region, on the material model of the whole
     // job (the links checked against the surely cut heights, as the levels' own)

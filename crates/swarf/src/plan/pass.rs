@@ -67,6 +67,8 @@ pub struct LayerGeom {
     pub reachable: Area,
     /// The job's regions.
     pub regions: Regions,
+    /// `centres` grown by a distance, once asked for (see [`LayerGeom::centres_grown`]).
+    grown: std::sync::OnceLock<(f64, Area)>,
 }
 
 impl LayerGeom {
@@ -97,7 +99,20 @@ impl LayerGeom {
             centres,
             reachable,
             regions: regions.clone(),
+            grown: std::sync::OnceLock::new(),
         })
+    }
+
+    /// `centres` grown by `d`: computed by the first call, and kept for later calls with the
+    /// same `d` (a z-level job computes it for the next level while the planner cuts this
+    /// one; an offset of a whole level's centres is one of the dearest steps of its clean-up).
+    pub fn centres_grown(&self, d: f64) -> std::borrow::Cow<'_, Area> {
+        let tol = crate::strategy::cleanup::ZONE_TOL;
+        match self.grown.get() {
+            Some((e, a)) if *e == d => std::borrow::Cow::Borrowed(a),
+            Some(_) => std::borrow::Cow::Owned(self.centres.offset(d, tol)),
+            None => std::borrow::Cow::Borrowed(&self.grown.get_or_init(|| (d, self.centres.offset(d, tol))).1),
+        }
     }
 }
 

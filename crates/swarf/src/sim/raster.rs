@@ -186,6 +186,20 @@ fn row_columns(grid: &Grid, st: Option<&Stadium>, j: usize, i0: usize, i1: usize
     (lo <= hi).then_some((lo as usize, hi as usize))
 }
 
+/// The columns of row `j` whose cell centres lie within `rho` of `c` (`None` when none may).
+#[inline]
+fn disk_columns(grid: &Grid, c: DVec2, rho: f64, j: usize) -> Option<(i64, i64)> {
+    let dy = grid.y0 + (j as f64 + 0.5) * grid.res - c.y;
+    let w2 = rho * rho - dy * dy;
+    if w2 <= 0.0 {
+        return None;
+    }
+    let w = w2.sqrt();
+    let l = ceil_i((c.x - w - grid.x0) / grid.res - 0.5);
+    let h = floor_i((c.x + w - grid.x0) / grid.res - 0.5);
+    (l <= h).then_some((l, h))
+}
+
 /// Messages the replay sends the exact model's thread at a time.
 const FEED_CHUNK: usize = 2048;
 
@@ -242,6 +256,10 @@ pub struct RasterSim {
     sure: Vec<f32>,
     /// Half the diagonal of a cell (the farthest a point of a cell lies from its centre).
     half_diag: f64,
+    /// Where the last [`RasterSim::cut`] ended, and its z, when it was flat: every cell
+    /// within the tool's radius of that point (the radius less half a cell's diagonal where
+    /// `sure` is kept) then stands no higher than that z.
+    last_flat_end: Option<(DVec2, f32)>,
     s0: Vec<f32>,
     p: Vec<f32>,
     /// Initial cell states (see [`state`]).
@@ -370,6 +388,7 @@ impl RasterSim {
             s: s0.clone(),
             sure: if opts.sure_links { s0.clone() } else { Vec::new() },
             half_diag: res * std::f64::consts::FRAC_1_SQRT_2,
+            last_flat_end: None,
             s0,
             p,
             state: st,
@@ -606,9 +625,23 @@ impl RasterSim {
             let flat = path.is_flat().then(|| (Fast::new(path), z0 as f32));
             let slope = flat.is_none().then(|| (Reach::new(path, r), sure.then(|| Reach::new(path, rs))));
             let st = stadium_of(path, r);
+            // The cells within reach of where the last flat cut ended stand no higher than its
+            // z: when that is not above this path's lowest point, the height test below would
+            // pass over every one of them, and a row is scanned on either side of that disk
+            // instead (a planned program's moves are short, and most of each move's stadium
+            // is the disk the move before it cut: the same cells lowered, a fraction of the
+            // reads). The disk is taken a micrometre smaller than the reach, for rounding.
+            let before =
+                self.last_flat_end.filter(|(_, z)| *z <= zmin).map(|(e, _)| (e, if sure { rs } else { r } - 1e-6));
             for j in j0..=j1 {
                 let Some((i0, i1)) = row_columns(&self.grid, st.as_ref(), j, i0, i1) else { continue };
-                for (i0, i1) in block_runs(i0, i1) {
+                let runs = match before.and_then(|(e, rho)| disk_columns(&self.grid, e, rho, j)) {
+                    Some((l, h)) => [(i0 as i64, (i1 as i64).min(l - 1)), ((i0 as i64).max(h + 1), i1 as i64)],
+                    None => [(i0 as i64, i1 as i64), (1, 0)],
+                };
+                for (i0, i1) in
+                    runs.into_iter().filter(|(a, b)| a <= b).flat_map(|(a, b)| block_runs(a as usize, b as usize))
+                {
                     // nothing in a block stands above the path's lowest point: nothing to cut
                     if self.bmax[(j / BLOCK) * self.nbx + i0 / BLOCK] <= zmin {
                         continue;
@@ -642,6 +675,7 @@ impl RasterSim {
                 }
             }
         }
+        self.last_flat_end = path.is_flat().then(|| (path.at(1.0).truncate(), path.z_range().0 as f32));
         if self.track_exact {
             match &mut self.feed.0 {
                 Some(f) => f.send(ToExact::Add(*path)),
@@ -1471,6 +1505,52 @@ mod tests {
                 }
             }
             assert!(lowered > 100, "{a:?}→{b:?} lowered {lowered} cells");
+        }
+    }
+
+    #[test]
+    fn a_cut_after_a_flat_cut_lowers_the_same_cells_without_reading_the_disk_it_ended_in() {
+        // a chain of short lines and arcs at one depth, a step down, a ramp, a gap, a move
+        // higher up: cut as a program is (each cut may pass over the disk where the flat cut
+        // before it ended) and with that forgotten before every cut, the heights are the same
+        let mut pts = Vec::new();
+        let mut p = DVec3::new(-12.0, -6.0, -1.0);
+        for k in 0..80 {
+            let a = 0.31 * k as f64;
+            let q = p + DVec3::new(a.cos(), a.sin(), 0.0) * if k % 9 == 0 { 0.04 } else { 0.7 };
+            let q = DVec3::new(q.x, q.y, if k == 40 { -1.6 } else { p.z });
+            let m = if k % 5 == 0 {
+                // an arc through the chord's end, its centre to the left
+                let c = (p.truncate() + q.truncate()) / 2.0 + (q - p).truncate().perp() * 0.8;
+                Path::Arc(crate::toolpath::ArcGeom::new(p, q, c, true))
+            } else {
+                Path::Line { a: p, b: q }
+            };
+            pts.push(m);
+            p = q;
+        }
+        pts.push(Path::Line { a: p, b: p + DVec3::new(3.0, 1.0, -0.9) });
+        pts.push(Path::Line { a: DVec3::new(8.0, 8.0, -2.5), b: DVec3::new(9.0, 6.0, -2.5) });
+        pts.push(Path::Line { a: DVec3::new(9.0, 6.0, -0.5), b: DVec3::new(2.0, 3.0, -0.5) });
+        for sure in [false, true] {
+            let job = Job {
+                floor: -5.0,
+                cutting: Cutting::with_tool_diameter(6.0).with_width(Width::Stepover(0.25)),
+                ..Job::new("t", Area::rect(-20.0, -20.0, 20.0, 20.0), Area::empty(), 6.0, 5.0)
+            };
+            let regions = job.regions(job.radius(), 0.0).expect("regions");
+            let opts = SimOptions { res: Some(0.1), sure_links: sure, ..Default::default() };
+            let mut chained = RasterSim::new(&job, &regions, &opts).expect("simulator");
+            let mut each = chained.clone();
+            for m in &pts {
+                chained.cut(m);
+                each.last_flat_end = None;
+                each.cut(m);
+            }
+            assert!(chained.heights() == each.heights(), "sure {sure}: the heights differ");
+            assert!(chained.sure == each.sure, "sure {sure}: the surely cut heights differ");
+            let lowered = chained.heights().iter().filter(|h| **h < 5.0).count();
+            assert!(lowered > 20_000, "{lowered} cells cut");
         }
     }
 

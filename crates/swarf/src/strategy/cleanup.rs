@@ -17,7 +17,7 @@ const SLIVER: f64 = 0.02;
 
 /// Offset tolerance of the zones that clip clean-up passes, mm (an offset within it only
 /// grows the zone).
-const ZONE_TOL: f64 = 0.01;
+pub(crate) const ZONE_TOL: f64 = 0.01;
 
 /// Radius, as a fraction of the tool radius, of the fillets the adaptive clean-up's wall contour
 /// puts in the corners its tool centres cannot turn round.
@@ -88,9 +88,9 @@ pub fn passes_for_leftover(g: &LayerGeom, climb: bool, opts: &AdaptiveOptions, l
         // (the wall contour is the edge of the centres' region: clip by the leftover's reach
         // only, or the clipper may drop the contour as outside)
         let zone = if opts.full_wall_contour {
-            g.centres.offset(g.r + cell, ZONE_TOL)
+            g.centres_grown(g.r + cell)
         } else {
-            left.offset(g.r + 0.01 + cell, ZONE_TOL)
+            std::borrow::Cow::Owned(left.offset(g.r + 0.01 + cell, ZONE_TOL))
         };
         // with the corners where the walls close round the tool rounded off: a tool driven
         // into such a corner meets the material it can never clear on a quarter of its
