@@ -2,7 +2,7 @@
 """swarf and FreeCAD's Adaptive (libarea's Adaptive2d) side by side on the example cases.
 
     cargo build --release
-    python3 scripts/side_by_side.py [--repeat 3] [--swarf target/release/swarf] [CASE.json ...]
+    python3 scripts/side_by_side.py [--repeat 3] [--swarf target/release/swarf] [--keep DIR] [CASE.json ...]
 
 For every case it runs the command a user runs, `swarf rough CASE -o OUT.ngc --report R.json`,
 as a whole process (reading, planning, proving on the simulator, writing), and keeps the best
@@ -17,6 +17,14 @@ the way FreeCAD's Path workbench calls it: the stock outline as the stock paths;
 cutting length is the length of its cutting paths times swarf's number of levels (FreeCAD
 repeats its one 2D path at every level). Without FreeCAD the script prints swarf's columns.
 
+When `freecadcmd` is there too, FreeCAD's program is made from those paths by FreeCAD's own
+`PathAdaptive.GenerateGCode` (scripts/freecad_program.py: the helix entries from the stock top
+at every level, links and lifts as a FreeCAD user gets them) at swarf's levels, clearance 5 mm
+and safe height 3 mm above the stock, the case's feed, and both programs are replayed by
+`swarf view` on the same simulator: machining time, largest and mean engagement outside the
+entry bores (a move that goes down while it moves sideways reads as an entry, in either
+program) and gouges. `--keep DIR` keeps FreeCAD's programs, for any other checker.
+
 Standard library only. Prints a Markdown table on stdout.
 """
 
@@ -25,6 +33,8 @@ import glob
 import json
 import math
 import os
+import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -91,7 +101,7 @@ def freecad_inputs(case):
 
 def freecad_run(area, case, stepover, repeat):
     """Best planning time of Adaptive2d.Execute at `stepover` (a fraction of the diameter), s,
-    and the length of its cutting paths, mm."""
+    the length of its cutting paths, mm, and its results as the Path workbench keeps them."""
     stock_paths, paths, mode = freecad_inputs(case)
     d = float(case["tool"]["diameter"])
     best, length = math.inf, 0.0
@@ -127,7 +137,69 @@ def freecad_run(area, case, stepover, repeat):
                 if int(mt) == cutting:
                     pts = [tuple(p) for p in pts]
                     length += sum(math.dist(a, b) for a, b in zip(pts, pts[1:]))
-    return best, length
+    kept = [
+        {
+            "HelixCenterPoint": list(r.HelixCenterPoint),
+            "StartPoint": list(r.StartPoint),
+            "AdaptivePaths": [[int(mt), [list(p) for p in pts]] for mt, pts in r.AdaptivePaths],
+            "ReturnMotionType": int(r.ReturnMotionType),
+        }
+        for r in results
+    ]
+    return best, length, kept
+
+
+def freecad_program(case, results, report, out, tmp):
+    """Writes FreeCAD's program (scripts/freecad_program.py, run by `freecadcmd`) at swarf's
+    levels, clearance 5 mm and safe height 3 mm above the stock, the case's feed for both
+    directions; True when it was written."""
+    exe = shutil.which("freecadcmd")
+    if exe is None or not results:
+        return False
+    top = float(case.get("stock_top", 0.0))
+    levels = report["levels"]
+    feed = float(case.get("feed_default", 1000.0))
+    job = {
+        "results": results,
+        "start_depth": top,
+        "final_depth": levels[-1],
+        # (a hair more, so that FreeCAD's own division gives swarf's levels)
+        "step_down": (top - levels[-1]) / len(levels) + 1e-6,
+        "clearance_height": top + 5.0,
+        "safe_height": top + 3.0,
+        "feed": feed,
+        "vert_feed": feed,
+        "tool_diameter": float(case["tool"]["diameter"]),
+        "spindle_rpm": case.get("spindle_rpm"),
+        "out": out,
+    }
+    path = os.path.join(tmp, "freecad_job.json")
+    with open(path, "w") as f:
+        json.dump(job, f)
+    script = os.path.join(HERE, "freecad_program.py")
+    env = dict(os.environ, SWARF_FC_JOB=path)
+    subprocess.run([exe, "-c", "exec(open(%r).read())" % script], env=env, check=True, capture_output=True)
+    return os.path.exists(out)
+
+
+VIEW_LINE = re.compile(
+    r"([\d.]+) min, engagement max / p95 / mean ([\d.]+)° / ([\d.]+)° / ([\d.]+)°, gouges (\d+)"
+)
+
+
+def proven(exe, program, case_path, tmp):
+    """(machining min, max, p95 and mean engagement °, gouges) of any program on the case, by
+    `swarf view` (swarf's simulator, the same replay for every program)."""
+    res = subprocess.run(
+        [exe, "view", program, "--case", case_path, "-o", os.path.join(tmp, "view.html")],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    m = VIEW_LINE.search(res.stdout + res.stderr)
+    if m is None:
+        raise RuntimeError("swarf view said: " + res.stdout + res.stderr)
+    return float(m[1]), float(m[2]), float(m[3]), float(m[4]), int(m[5])
 
 
 def swarf_run(exe, path, repeat, tmp):
@@ -149,6 +221,7 @@ def main():
     ap.add_argument("cases", nargs="*", help="case files (default: examples/cases/*.json)")
     ap.add_argument("--swarf", default=os.path.join(ROOT, "target", "release", "swarf"))
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--keep", metavar="DIR", help="copy FreeCAD's programs (NAME.freecad.ngc) into DIR")
     a = ap.parse_args()
     cases = a.cases or sorted(glob.glob(os.path.join(ROOT, "examples", "cases", "*.json")))
     area = load_area()
@@ -159,6 +232,10 @@ def main():
     if area is not None:
         head += " FreeCAD plan s | run / FreeCAD | FreeCAD cut m | cut / FreeCAD |"
         rule += "---|---|---|---|"
+    program = area is not None and shutil.which("freecadcmd") is not None
+    if program:
+        head += " FreeCAD min | min / FreeCAD | engagement max swarf / FreeCAD | mean swarf / FreeCAD | gouges swarf / FreeCAD |"
+        rule += "---|---|---|---|---|"
     print(head)
     print(rule)
     with tempfile.TemporaryDirectory() as tmp:
@@ -180,12 +257,31 @@ def main():
                 r["engagement_ref_deg"],
             )
             if area is not None:
-                fc_s, fc_len = freecad_run(area, case, r["stepover"], a.repeat)
+                fc_s, fc_len, results = freecad_run(area, case, r["stepover"], a.repeat)
                 fc_m = fc_len * len(r["levels"]) / 1000.0
                 if fc_m > 0:
                     row += " %.2f | %.2f | %.2f | %.2f |" % (fc_s, run_s / fc_s, fc_m, cut_m / fc_m)
                 else:
                     row += " %.2f | no path | 0 | no path |" % fc_s
+            if program:
+                fc_ngc = os.path.join(tmp, name + ".freecad.ngc")
+                if fc_m > 0 and freecad_program(case, results, r, fc_ngc, tmp):
+                    own = proven(a.swarf, os.path.join(tmp, name + ".ngc"), path, tmp)
+                    fc = proven(a.swarf, fc_ngc, path, tmp)
+                    if a.keep:
+                        shutil.copy(fc_ngc, os.path.join(a.keep, name + ".freecad.ngc"))
+                    row += " %.2f | %.2f | %.0f / %.0f | %.1f / %.1f | %d / %d |" % (
+                        fc[0],
+                        own[0] / fc[0],
+                        own[1],
+                        fc[1],
+                        own[3],
+                        fc[3],
+                        own[4],
+                        fc[4],
+                    )
+                else:
+                    row += " no path | | | | |"
             print(row, flush=True)
 
 

@@ -20,7 +20,7 @@ pub mod grid;
 pub mod heights;
 #[doc(hidden)]
 pub mod raster;
-mod replay;
+pub(crate) mod replay;
 #[doc(hidden)]
 pub mod sdf;
 #[doc(hidden)]

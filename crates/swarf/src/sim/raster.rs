@@ -1059,6 +1059,16 @@ impl RasterSim {
     /// it records the cuts and measures the exact engagement while this thread cuts the cells
     /// and reads the pixels, with the same answers as one after the other.
     pub fn replay(&mut self, tp: &Toolpath, progress: &mut dyn FnMut(f64)) -> Replay {
+        self.replay_carrying(tp, progress, &mut super::replay::Carry::default())
+    }
+
+    /// [`RasterSim::replay`] of a piece of a program, `carry` from the piece before it.
+    pub(crate) fn replay_carrying(
+        &mut self,
+        tp: &Toolpath,
+        progress: &mut dyn FnMut(f64),
+        carry: &mut super::replay::Carry,
+    ) -> Replay {
         let stand_in = ExactModel::new(self.r, DVec2::ZERO, DVec2::ONE, Vec::new(), 0.0, 1.0);
         let model = std::mem::replace(&mut self.exact, stand_in);
         let (tx, rx) = std::sync::mpsc::sync_channel(8);
@@ -1071,8 +1081,9 @@ impl RasterSim {
                 pending: Vec::with_capacity(FEED_CHUNK),
                 answers: std::sync::Mutex::new(answers),
             });
-            let replayed =
-                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| super::replay::run(self, tp, progress)));
+            let replayed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                super::replay::run_carrying(self, tp, progress, carry)
+            }));
             // (dropping the sender ends the thread, also after a panic)
             self.feed.0 = None;
             (replayed, worker.join())

@@ -163,19 +163,38 @@ pub(crate) trait Engine {
     fn removed_volume(&self) -> f64;
 }
 
+/// What a replay of a program in pieces carries from one piece to the next: the entry being
+/// read, and the bore it made (the samples of the turn at its bottom are inside it).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Carry {
+    /// The bore: centre, radius, and the cutting length still allowed inside it.
+    bore: Option<(DVec2, f64, f64)>,
+    /// The points of the entry so far.
+    entry_pts: Vec<DVec3>,
+    /// The centre of the entry's arcs, and their largest radius.
+    entry_arc_center: Option<(DVec2, f64)>,
+}
+
 /// Replays `tp` on `m`: cuts it, samples engagement, finds gouges, collisions and plunges.
 /// `progress` is called with the fraction done.
 pub(crate) fn run<M: Engine>(m_: &mut M, tp: &Toolpath, progress: &mut dyn FnMut(f64)) -> Replay {
+    run_carrying(m_, tp, progress, &mut Carry::default())
+}
+
+/// [`run`] on a piece of a program, `carry` from the piece before it (and for the next).
+pub(crate) fn run_carrying<M: Engine>(
+    m_: &mut M,
+    tp: &Toolpath,
+    progress: &mut dyn FnMut(f64),
+    carry: &mut Carry,
+) -> Replay {
+    let Carry { bore, entry_pts, entry_arc_center } = carry;
     let mut out = Replay::default();
     let mut cum = 0.0;
     let nmoves = tp.moves.len().max(1);
     let r = m_.radius();
     let step = m_.sample_step();
     let slack = m_.spacing().max(0.05 * r);
-    // entry bore tracking
-    let mut bore: Option<(DVec2, f64, f64)> = None; // centre, radius, length allowance left
-    let mut entry_pts: Vec<DVec3> = Vec::new();
-    let mut entry_arc_center: Option<(DVec2, f64)> = None;
     // samples whose engagement the engine measures after the replay
     let mut later: Vec<usize> = Vec::new();
     // every move, for the gouge test after the replay (the part does not change)
@@ -193,24 +212,24 @@ pub(crate) fn run<M: Engine>(m_: &mut M, tp: &Toolpath, progress: &mut dyn FnMut
             entry_pts.push(m.to);
             if let crate::toolpath::Motion::Arc { center, .. } = m.motion {
                 let rr = (from.truncate() - center).length();
-                entry_arc_center = Some((center, entry_arc_center.map_or(rr, |(_, r): (DVec2, f64)| r.max(rr))));
+                *entry_arc_center = Some((center, entry_arc_center.map_or(rr, |(_, r): (DVec2, f64)| r.max(rr))));
             }
         } else if !entry_pts.is_empty() {
-            let (c, rad) = match entry_arc_center {
+            let (c, rad) = match *entry_arc_center {
                 Some(cr) => cr,
                 None => {
                     let mut lo = entry_pts[0].truncate();
                     let mut hi = lo;
-                    for p in &entry_pts {
+                    for p in entry_pts.iter() {
                         lo = lo.min(p.truncate());
                         hi = hi.max(p.truncate());
                     }
                     ((lo + hi) / 2.0, (hi - lo).length() / 2.0)
                 }
             };
-            bore = Some((c, rad, std::f64::consts::TAU * rad + r));
+            *bore = Some((c, rad, std::f64::consts::TAU * rad + r));
             entry_pts.clear();
-            entry_arc_center = None;
+            *entry_arc_center = None;
         }
         if m.is_rapid() {
             // a rapid must not touch uncut material
@@ -218,7 +237,7 @@ pub(crate) fn run<M: Engine>(m_: &mut M, tp: &Toolpath, progress: &mut dyn FnMut
             if worst > 0.0 {
                 out.rapid_collisions.push(Event { move_index: mi, at: at.to_array(), depth: worst });
             }
-            bore = None;
+            *bore = None;
         } else {
             let xy = path.xy_length();
             let dz = m.to.z - from.z;
@@ -260,7 +279,7 @@ pub(crate) fn run<M: Engine>(m_: &mut M, tp: &Toolpath, progress: &mut dyn FnMut
                         }
                     };
                     cum += step_len;
-                    let in_bore = match (&mut bore, kind) {
+                    let in_bore = match (&mut *bore, kind) {
                         (_, SampleKind::Descending | SampleKind::Plunge)
                             if matches!(m.kind, MoveKind::Entry | MoveKind::Plunge) =>
                         {
@@ -270,7 +289,7 @@ pub(crate) fn run<M: Engine>(m_: &mut M, tp: &Toolpath, progress: &mut dyn FnMut
                             let inside = (p.truncate() - *c).length() <= *rad + slack && *left > 0.0;
                             *left -= step_len;
                             if !inside {
-                                bore = None;
+                                *bore = None;
                             }
                             inside
                         }

@@ -306,8 +306,10 @@ fn replay_reading(
 ) -> (Replay, Vec<(u32, f64)>) {
     let mut all = Replay::default();
     let mut s_off = 0.0;
+    // (an entry and the bore it makes may straddle a mark)
+    let mut carry = crate::sim::replay::Carry::default();
     let out = by_marks(model, tp, marks, before, base, |model, done, part| {
-        let rp = model.replay(part, &mut |_| {});
+        let rp = model.replay_carrying(part, &mut |_| {}, &mut carry);
         all.samples.extend(rp.samples.iter().map(|s| Sample { s: s.s + s_off, mi: s.mi + done as u32, ..*s }));
         let shift = |v: &[Event]| v.iter().map(|e| Event { move_index: e.move_index + done, ..*e }).collect::<Vec<_>>();
         all.gouges.extend(shift(&rp.gouges));
@@ -1042,6 +1044,43 @@ mod tests {
         let (levels, of) = levels_of(&path());
         assert_eq!(levels, vec![-1.0, -2.0]);
         assert_eq!(of, vec![0, 0, 0, 1, 1, 1]);
+    }
+
+    #[test]
+    fn an_entry_bore_read_in_pieces_is_read_as_in_one_replay() {
+        // a helix of straight moves (as FreeCAD writes it), the turn at its bottom, and a cut
+        // out of the bore; the removal mark just after the helix cuts the replay in two there
+        use crate::model::{Cutting, Job, Width};
+        let job = Job {
+            floor: -2.0,
+            cutting: Cutting::with_tool_diameter(6.0).with_width(Width::Stepover(0.25)),
+            ..Job::new("t", Area::rect(-20.0, -20.0, 20.0, 20.0), Area::empty(), 0.0, 0.0)
+        };
+        let on = |a: f64, z: f64| DVec3::new(2.0 * a.cos(), 2.0 * a.sin(), z);
+        let mut tp = Toolpath::new(Tool::flat(6.0), DVec3::new(2.0, 0.0, 5.0), 5.0);
+        tp.rapid(on(0.0, 1.0));
+        for k in 1..=48 {
+            let a = std::f64::consts::TAU * k as f64 / 16.0;
+            tp.line(MoveKind::Entry, on(a, 1.0 - 3.0 * k as f64 / 48.0), 300.0);
+        }
+        let entry_end = tp.moves.len();
+        for k in 1..=16 {
+            tp.line(MoveKind::Cut, on(std::f64::consts::TAU * k as f64 / 16.0, -2.0), 500.0);
+        }
+        tp.line(MoveKind::Cut, DVec3::new(12.0, 0.0, -2.0), 500.0);
+        tp.rapid(DVec3::new(12.0, 0.0, 5.0));
+        let regions = job.regions(job.radius(), 0.0).expect("regions");
+        let sim = SimOptions { res: Some(0.1), ..Default::default() };
+        let whole = RasterSim::new(&job, &regions, &sim).expect("model").replay(&tp, &mut |_| {});
+        let mut model = RasterSim::new(&job, &regions, &sim).expect("model");
+        let (pieces, read) = replay_reading(&mut model, &tp, &[0, entry_end, tp.moves.len()], 0, 0.0);
+        assert_eq!(read.len(), 3, "{read:?}");
+        let flags = |rp: &Replay| rp.samples.iter().map(|s| (s.mi, s.bore)).collect::<Vec<_>>();
+        assert_eq!(flags(&pieces), flags(&whole));
+        // the turn at the bottom is inside the bore, the cut out of it is not
+        let at_bottom = |rp: &Replay| rp.samples.iter().filter(|s| s.bore && s.mi as usize >= entry_end).count();
+        assert!(at_bottom(&pieces) > 20, "{} samples of the bottom turn in the bore", at_bottom(&pieces));
+        assert!(pieces.samples.iter().any(|s| !s.bore && s.at.x > 6.0));
     }
 
     #[test]
