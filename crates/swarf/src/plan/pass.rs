@@ -17,6 +17,10 @@ pub const TOUCH_MARGIN: f64 = 0.03;
 /// beyond its radius (mm); below [`TOUCH_MARGIN`], so pass ends in the air qualify.
 pub const LANDING_MARGIN: f64 = 0.02;
 
+/// Offset tolerance of the zones that clip clean-up passes, mm (an offset within it only
+/// grows the zone).
+pub const ZONE_TOL: f64 = 0.01;
+
 /// What a pass is for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PassKind {
@@ -107,7 +111,7 @@ impl LayerGeom {
     /// same `d` (a z-level job computes it for the next level while the planner cuts this
     /// one; an offset of a whole level's centres is one of the dearest steps of its clean-up).
     pub fn centres_grown(&self, d: f64) -> std::borrow::Cow<'_, Area> {
-        let tol = crate::strategy::cleanup::ZONE_TOL;
+        let tol = ZONE_TOL;
         match self.grown.get() {
             Some((e, a)) if *e == d => std::borrow::Cow::Borrowed(a),
             Some(_) => std::borrow::Cow::Owned(self.centres.offset(d, tol)),

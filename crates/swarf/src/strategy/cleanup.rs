@@ -10,14 +10,11 @@
 use super::AdaptiveOptions;
 use crate::geom::{Area, DVec2};
 use crate::model::REGION_TOL;
+use crate::plan::pass::ZONE_TOL;
 use crate::plan::{LayerGeom, Pass, PassKind};
 
 /// Leftovers thinner than twice this (mm) are numerical slivers, not material.
 const SLIVER: f64 = 0.02;
-
-/// Offset tolerance of the zones that clip clean-up passes, mm (an offset within it only
-/// grows the zone).
-pub(crate) const ZONE_TOL: f64 = 0.01;
 
 /// Radius, as a fraction of the tool radius, of the fillets the adaptive clean-up's wall contour
 /// puts in the corners its tool centres cannot turn round.
