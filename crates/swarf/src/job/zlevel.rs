@@ -33,13 +33,16 @@ pub fn plan(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(f64)) -
     state.track_exact = false;
     let safe_z = job.top() + opts.link.clearance;
     let mut strategy = opts.strategy.clone();
-    let wall_contours = strategy.adaptive_mut().is_some();
-    if let Some(a) = strategy.adaptive_mut() {
-        // (the slivers the fillets and a cell-sized model leave stack into walls a whole
-        // depth tall over the levels)
-        a.corner_fillets = false;
-        a.full_wall_contour = true;
-    }
+    // (the slivers the fillets and a cell-sized model leave stack into walls a whole depth tall
+    // over the levels: no fillets, and the wall contour all round)
+    let wall_contours = match strategy.adaptive_mut() {
+        Some(a) => {
+            a.corner_fillets = false;
+            a.full_wall_contour = true;
+            true
+        }
+        None => false,
+    };
     let level_opts = RoughOptions { strategy, ..opts.clone() };
     let cell = state.grid.res;
     let mut levels: Vec<(f64, Toolpath)> = Vec::new();

@@ -1340,13 +1340,18 @@ mod tests {
 
     /// The same with another stock and a part.
     fn sim_with(stock: Area, part: Area) -> RasterSim {
+        sim_on(stock, part, &SimOptions { res: Some(0.1), ..Default::default() })
+    }
+
+    /// The same with other simulation settings.
+    fn sim_on(stock: Area, part: Area, opts: &SimOptions) -> RasterSim {
         let job = Job {
             floor: -5.0,
             cutting: Cutting::with_tool_diameter(6.0).with_width(Width::Stepover(0.25)),
             ..Job::new("t", stock, part, 6.0, 5.0)
         };
         let regions = job.regions(job.radius(), 0.0).expect("regions");
-        RasterSim::new(&job, &regions, &SimOptions { res: Some(0.1), ..Default::default() }).expect("simulator")
+        RasterSim::new(&job, &regions, opts).expect("simulator")
     }
 
     fn point(p: DVec2) -> Path {
@@ -1415,14 +1420,8 @@ mod tests {
 
     #[test]
     fn a_speck_between_two_sweeps_keeps_rapids_out() {
-        let job = Job {
-            floor: -5.0,
-            cutting: Cutting::with_tool_diameter(6.0).with_width(Width::Stepover(0.25)),
-            ..Job::new("t", Area::rect(-20.0, -20.0, 20.0, 20.0), Area::empty(), 6.0, 5.0)
-        };
-        let regions = job.regions(job.radius(), 0.0).expect("regions");
         let opts = SimOptions { res: Some(0.1), sure_links: true, ..Default::default() };
-        let mut s = RasterSim::new(&job, &regions, &opts).expect("simulator");
+        let mut s = sim_on(Area::rect(-20.0, -20.0, 20.0, 20.0), Area::empty(), &opts);
         let mut plain = sim();
         let z = -2.0;
         // (the model without the surely cut heights does not see the speck)
@@ -1549,14 +1548,8 @@ mod tests {
         // (cells of 4.5 mm: half their diagonal is more than the radius, and the surely cut
         // heights are lowered by no cut)
         for (sure, res) in [(false, 0.1), (true, 0.1), (true, 4.5)] {
-            let job = Job {
-                floor: -5.0,
-                cutting: Cutting::with_tool_diameter(6.0).with_width(Width::Stepover(0.25)),
-                ..Job::new("t", Area::rect(-20.0, -20.0, 20.0, 20.0), Area::empty(), 6.0, 5.0)
-            };
-            let regions = job.regions(job.radius(), 0.0).expect("regions");
             let opts = SimOptions { res: Some(res), sure_links: sure, ..Default::default() };
-            let mut chained = RasterSim::new(&job, &regions, &opts).expect("simulator");
+            let mut chained = sim_on(Area::rect(-20.0, -20.0, 20.0, 20.0), Area::empty(), &opts);
             let mut each = chained.clone();
             for m in &pts {
                 chained.cut(m);
