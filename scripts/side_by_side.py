@@ -269,6 +269,7 @@ def main():
                     own = proven(a.swarf, os.path.join(tmp, name + ".ngc"), path, tmp)
                     fc = proven(a.swarf, fc_ngc, path, tmp)
                     if a.keep:
+                        os.makedirs(a.keep, exist_ok=True)
                         shutil.copy(fc_ngc, os.path.join(a.keep, name + ".freecad.ngc"))
                     row += " %.2f | %.2f | %.0f / %.0f | %.1f / %.1f | %d / %d |" % (
                         fc[0],
