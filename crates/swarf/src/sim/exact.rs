@@ -154,10 +154,14 @@ struct Scratch {
     /// A disk round each arc of the base not covered yet (centre, radius).
     disks: Vec<(DVec2, f64)>,
     /// The primitives near the last queries ([`ExactModel::near`]), newest first: those
-    /// recorded before `near_upto` whose hull reaches into the disk `near_disk`.
+    /// recorded before `near_upto`, at or below `near_zq`, whose hull reaches into the disk
+    /// `near_disk`.
     near: Vec<u32>,
     near_disk: Option<(DVec2, f64)>,
     near_upto: u32,
+    /// The height the list was made for: the primitives at or below it (a query at or below
+    /// it reads the list).
+    near_zq: f64,
     /// The list being made.
     near_new: Vec<u32>,
 }
@@ -398,43 +402,37 @@ impl ExactModel {
         self.prims.len() as u32
     }
 
-    /// Fills `sc.near` with the primitives recorded before `upto` whose hull reaches within
-    /// `rho` of `c` — and maybe others, never fewer — newest first: the candidates of a query
-    /// before its own tests. Consecutive queries of a replay stand close together, so the list
+    /// Fills `sc.near` with the primitives recorded before `upto`, at or below `zq`, whose hull
+    /// reaches within `rho` of `c` — and maybe others, never fewer — newest first: the
+    /// candidates of a query before its own tests. Consecutive queries of a replay stand close together, so the list
     /// is kept for a disk [`NEAR_SLACK`] radii wider than the ring and read again by the next
     /// queries whose rings lie inside that disk, with only the primitives recorded since
     /// looked up in the cells of the disk's box; a query outside it (or asked with fewer
-    /// primitives) builds the list anew. Every primitive that reaches a ring inside the disk is
+    /// primitives, or higher) builds the list anew. Every primitive that reaches a ring inside the disk is
     /// listed in a cell of its box, and one listed that cannot reach the ring is rejected by
     /// the query's own tests or adds no interval, so the answers are those of the ring's own
     /// cells, to the bit; a replay's queries skip the scan of the cells and the sort that most
     /// of them needed (a tenth of the exact engagement's instructions on square_pocket).
-    fn near(&self, c: DVec2, rho: f64, upto: u32, sc: &mut Scratch) {
-        let kept = sc.near_disk.is_some_and(|(kc, kr)| (c - kc).length() + rho <= kr) && upto >= sc.near_upto;
+    fn near(&self, c: DVec2, rho: f64, zq: f64, upto: u32, sc: &mut Scratch) {
+        let kept = sc.near_disk.is_some_and(|(kc, kr)| (c - kc).length() + rho <= kr)
+            && upto >= sc.near_upto
+            && zq <= sc.near_zq;
         if !kept {
             let reach = rho + NEAR_SLACK * self.r;
-            sc.near.clear();
             sc.near_disk = Some((c, reach));
+            sc.near_zq = zq;
             sc.near_upto = 0;
-            let m = DVec2::splat(reach);
-            self.listed(c - m, c + m, 0, upto, &mut sc.near_new);
-            sc.near_new.retain(|&id| {
-                let (hc, hr) = self.prims[id as usize].hull;
-                (hc - c).length() - hr <= reach
-            });
-            std::mem::swap(&mut sc.near, &mut sc.near_new);
-            sc.near_upto = upto;
-            return;
+            sc.near.clear();
         }
         if upto > sc.near_upto {
-            // the primitives recorded since, from the cells of the kept disk's box (those of
-            // this ring's box alone would miss one the next ring reaches)
-            let (kc, kr) = sc.near_disk.expect("kept");
+            // the primitives recorded since (all of them for a new list), from the cells of
+            // the disk's box (those of this ring's box alone would miss one a later ring
+            // reaches), at or below the height
+            let (kc, kr) = sc.near_disk.expect("a disk");
             let m = DVec2::splat(kr);
-            self.listed(kc - m, kc + m, sc.near_upto, upto, &mut sc.near_new);
-            sc.near_new.retain(|&id| {
-                let (hc, hr) = self.prims[id as usize].hull;
-                (hc - kc).length() - hr <= kr
+            let z = sc.near_zq;
+            self.listed(kc - m, kc + m, sc.near_upto, upto, &mut sc.near_new, |p| {
+                p.z <= z && (p.hull.0 - kc).length() - p.hull.1 <= kr
             });
             sc.near_new.extend_from_slice(&sc.near);
             std::mem::swap(&mut sc.near, &mut sc.near_new);
@@ -442,9 +440,9 @@ impl ExactModel {
         }
     }
 
-    /// The primitives numbered `from..upto` listed in the cells that meet the box `[lo, hi]`,
-    /// each once, newest first, into `out`.
-    fn listed(&self, lo: DVec2, hi: DVec2, from: u32, upto: u32, out: &mut Vec<u32>) {
+    /// The primitives numbered `from..upto` listed in the cells that meet the box `[lo, hi]`
+    /// that pass `keep`, each once, newest first, into `out`.
+    fn listed(&self, lo: DVec2, hi: DVec2, from: u32, upto: u32, out: &mut Vec<u32>, keep: impl Fn(&Prim) -> bool) {
         out.clear();
         if let Some((x0, x1, y0, y1)) = self.cell_range(lo, hi) {
             for y in y0..=y1 {
@@ -453,7 +451,7 @@ impl ExactModel {
                     let list = &self.cells[y * self.nx + x];
                     let end = list.partition_point(|&id| id < upto);
                     let start = list[..end].partition_point(|&id| id < from);
-                    out.extend_from_slice(&list[start..end]);
+                    out.extend(list[start..end].iter().filter(|&&id| keep(&self.prims[id as usize])));
                 }
             }
         }
@@ -494,7 +492,7 @@ impl ExactModel {
         sc.covered.clear();
         let rr = self.r;
         let zq = z + eps;
-        self.near(c, rho, upto, sc);
+        self.near(c, rho, zq, upto, sc);
         sc.cand.clear();
         for i in 0..sc.near.len() {
             let id = sc.near[i];
@@ -935,9 +933,13 @@ mod tests {
     }
 
     /// The primitives kept from query to query ([`ExactModel::near`]) answer as the cells of
-    /// each query's own ring do: queries along random cuts (each close to the one before, the
-    /// cuts recorded between them), then the same queries in a shuffled order (far apart,
-    /// fewer primitives than the one before), against a fresh start for every query.
+    /// each query's own ring do, to the bit, against a fresh start for every query: queries
+    /// along random cuts (each close to the one before, the cuts recorded between them), the
+    /// same queries shuffled (far apart, fewer primitives than the one before), queries
+    /// alternating between two levels at the same points, and queries jittering about a point
+    /// with cuts anywhere around it recorded between them. (Reading a list made for the lower
+    /// level at the upper one, or looking the new primitives up in the ring's own cells
+    /// instead of the kept disk's, fails it.)
     #[test]
     fn kept_primitives_answer_as_the_rings_own_cells() {
         for seed in [3, 11, 29] {
@@ -950,6 +952,71 @@ mod tests {
             let shuffled: Vec<u64> = order.iter().map(|&i| m.measure(&queries[i], &mut sc).to_bits()).collect();
             assert_eq!(shuffled, order.iter().map(|&i| fresh[i]).collect::<Vec<_>>(), "seed {seed}, shuffled");
             assert!(fresh.iter().filter(|&&b| f64::from_bits(b) > 1.0).count() > queries.len() / 4, "seed {seed}: few engaged");
+        }
+        // two levels: cuts at the upper one do not count for the lower one, and the queries
+        // alternate between the levels at the same points (a list made for the lower level
+        // must not be read for the upper one)
+        let r = 3.0;
+        let mut m = model(r);
+        let mut queries = Vec::new();
+        for k in 0..10 {
+            let y = 1.5 * k as f64;
+            for z in [-2.0, -1.0] {
+                let (a, b) = (DVec3::new(-40.0, y, z), DVec3::new(30.0, y, z));
+                for i in 1..=160 {
+                    let t = i as f64 / 160.0;
+                    let cur = Path::Line { a, b: a + (b - a) * t };
+                    let c = (a + (b - a) * t).truncate();
+                    let dir = (b - a).truncate();
+                    queries.push(Query { c, z, dir, rho: r + 1e-4, eps: 0.01, current: Some(cur), upto: m.recorded() });
+                }
+                // (the lower level cut on the left only: on the right the upper level's own
+                // cuts clear its rings)
+                m.add(&Path::Line { a, b: if z < -1.5 { DVec3::new(-5.0, y, z) } else { b } });
+            }
+        }
+        let mut order: Vec<usize> = Vec::new();
+        for i in 0..queries.len() / 320 {
+            for j in 0..160 {
+                order.push(320 * i + 160 + j);
+                order.push(320 * i + j);
+            }
+        }
+        let fresh: Vec<u64> = order.iter().map(|&i| m.measure(&queries[i], &mut Scratch::default()).to_bits()).collect();
+        let mut sc = Scratch::default();
+        let kept: Vec<u64> = order.iter().map(|&i| m.measure(&queries[i], &mut sc).to_bits()).collect();
+        assert_eq!(kept, fresh, "two levels");
+        let (lower, upper): (Vec<f64>, Vec<f64>) = (
+            order.iter().zip(&fresh).filter(|(i, _)| queries[**i].z < -1.5).map(|(_, b)| f64::from_bits(*b)).collect(),
+            order.iter().zip(&fresh).filter(|(i, _)| queries[**i].z > -1.5).map(|(_, b)| f64::from_bits(*b)).collect(),
+        );
+        assert!(lower.iter().chain(&upper).filter(|&&e| e > 1.0 && e < 179.0).count() > 100, "too few partial engagements");
+        // queries jittering about one point, short cuts anywhere around it recorded between
+        // them: a primitive recorded after a list was made must be found wherever the next
+        // ring inside the list's disk lies, not only near the ring that added it
+        for seed in [5u64, 17, 41] {
+            let mut m = model(r);
+            let mut x = seed;
+            let mut next = move || {
+                x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                ((x >> 11) as f64) / ((1u64 << 53) as f64)
+            };
+            let o = DVec2::new(0.3, 0.7);
+            let mut queries = Vec::new();
+            for _ in 0..120 {
+                let a = o + DVec2::new(40.0 * next() - 20.0, 40.0 * next() - 20.0);
+                let b = a + DVec2::new(2.0 * next() - 1.0, 2.0 * next() - 1.0);
+                m.add(&Path::Line { a: a.extend(-1.0), b: b.extend(-1.0) });
+                let c = o + DVec2::new(2.8 * next() - 1.4, 2.8 * next() - 1.4) * std::f64::consts::FRAC_1_SQRT_2;
+                let dir = DVec2::from_angle(std::f64::consts::TAU * next());
+                queries.push(Query { c, z: -1.0, dir, rho: r + 1e-4, eps: 0.01, current: None, upto: m.recorded() });
+            }
+            let fresh: Vec<u64> = queries.iter().map(|q| m.measure(q, &mut Scratch::default()).to_bits()).collect();
+            let mut sc = Scratch::default();
+            let kept: Vec<u64> = queries.iter().map(|q| m.measure(q, &mut sc).to_bits()).collect();
+            assert_eq!(kept, fresh, "seed {seed}, jittering");
+            let partial = fresh.iter().filter(|&&b| (1.0..179.0).contains(&f64::from_bits(b))).count();
+            assert!(partial > 40, "seed {seed}: {partial} partial engagements");
         }
     }
 
