@@ -660,10 +660,14 @@ impl Profile {
                 let segs = grid.contour(c);
                 let mut flux = 0.0;
                 let mut ends = Vec::with_capacity(2 * segs.len());
+                // (neighbouring segments share their end, the same point to the bit: its
+                // radius is measured once, four evaluations of the field)
+                let mut known: std::collections::HashMap<(u64, u64), f64> = std::collections::HashMap::new();
+                let mut rho_at = |p: DVec2| *known.entry((p.x.to_bits(), p.y.to_bits())).or_insert_with(|| rho(p));
                 for [(a, ga), (b, gb)] in &segs {
                     flux += (*b - *a).length() * 0.5 * (ga.length() + gb.length());
-                    ends.push((ga.length(), rho(*a)));
-                    ends.push((gb.length(), rho(*b)));
+                    ends.push((ga.length(), rho_at(*a)));
+                    ends.push((gb.length(), rho_at(*b)));
                 }
                 ProfileRow { c, flux, ends }
             })
