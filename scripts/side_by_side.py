@@ -223,6 +223,8 @@ def main():
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--keep", metavar="DIR", help="copy FreeCAD's programs (NAME.freecad.ngc) into DIR")
     a = ap.parse_args()
+    if a.keep:
+        os.makedirs(a.keep, exist_ok=True)
     cases = a.cases or sorted(glob.glob(os.path.join(ROOT, "examples", "cases", "*.json")))
     area = load_area()
     if area is None:
@@ -269,7 +271,6 @@ def main():
                     own = proven(a.swarf, os.path.join(tmp, name + ".ngc"), path, tmp)
                     fc = proven(a.swarf, fc_ngc, path, tmp)
                     if a.keep:
-                        os.makedirs(a.keep, exist_ok=True)
                         shutil.copy(fc_ngc, os.path.join(a.keep, name + ".freecad.ngc"))
                     row += " %.2f | %.2f | %.0f / %.0f | %.1f / %.1f | %d / %d |" % (
                         fc[0],

@@ -149,8 +149,6 @@ struct Scratch {
     base: Vec<(f64, f64)>,
     /// Covered intervals of the ring (sorted and merged by [`Scratch::gaps`]).
     covered: Vec<(f64, f64)>,
-    /// The primitives that may cover part of the ring, newest first.
-    cand: Vec<u32>,
     /// A disk round each arc of the base not covered yet (centre, radius).
     disks: Vec<(DVec2, f64)>,
     /// The primitives near the last queries ([`ExactModel::near`]), newest first: those
@@ -487,19 +485,23 @@ impl ExactModel {
         if sc.base.is_empty() {
             return 0.0;
         }
-        // 2. intervals covered by cuts at or below this level: the primitives recorded before
-        // the query, of the cells the ring's box meets, each once, newest first (the newest
+        // 2. intervals covered by the move so far, then by the cuts at or below this level
+        // recorded before the query near the ring ([`Self::near`]), newest first (the newest
         // cover most of what will be covered, and each of the others is then first tested
         // against the arcs still uncovered: one that cannot reach any of them adds nothing)
         sc.covered.clear();
         let rr = self.r;
         let zq = z + eps;
+        if let Some(cur) = &current {
+            covered_intervals(cur, &Fast::new(cur), rr, &ring, &mut sc.angles, &mut sc.covered);
+        }
+        if !sc.gaps(&ring) {
+            return 0.0;
+        }
         self.near(c, rho, zq, upto, sc);
-        sc.cand.clear();
         // (every primitive listed was recorded before the query)
         for i in 0..sc.near.len() {
-            let id = sc.near[i];
-            let p = &self.prims[id as usize];
+            let p = &self.prims[sc.near[i] as usize];
             if p.z > zq {
                 continue;
             }
@@ -509,16 +511,6 @@ impl ExactModel {
             if v.dot(ring.u) + hr < 0.0 || v.length() - hr > rho {
                 continue;
             }
-            sc.cand.push(id);
-        }
-        if let Some(cur) = &current {
-            covered_intervals(cur, &Fast::new(cur), rr, &ring, &mut sc.angles, &mut sc.covered);
-        }
-        if !sc.gaps(&ring) {
-            return 0.0;
-        }
-        for i in 0..sc.cand.len() {
-            let p = &self.prims[sc.cand[i] as usize];
             if sc.disks.iter().all(|&(mc, h)| p.fast.distance(mc) > rr + h + 1e-9) {
                 continue;
             }
