@@ -6,8 +6,15 @@
 //! union of the tool disks along them), subtracted from the reachable material, and what is left
 //! gets more level curves of the wall distance at half, quarter, … the stepover, clipped to near
 //! the leftovers, until nothing is left (or four refinements).
+//!
+//! The adaptive strategy's clean-up ([`passes_for_leftover`]) takes the corners where the walls
+//! close round the tool in stages, so that no pass meets the corner's remnant on a whole
+//! quarter of its circle: its level curves have fillets of 0.4·R there, then passes along the
+//! wall contour near each corner bring the fillet down by 0.7 at a time to the wall contour's
+//! own (0.15·R at most), and the wall contour comes last.
 
 use super::AdaptiveOptions;
+use crate::geom::area::Fill;
 use crate::geom::{Area, DVec2};
 use crate::model::REGION_TOL;
 use crate::plan::pass::ZONE_TOL;
@@ -22,6 +29,26 @@ const CORNER_ROUND: f64 = 0.15;
 
 /// Share of the reachable area that the fillets of the wall contour may leave, at most.
 const REST_BUDGET: f64 = 0.003;
+
+/// Radius, as a fraction of the tool radius, of the fillets the adaptive clean-up's level
+/// curves put in the corners where the walls close round the tool.
+///
+/// A level curve with a sharp corner there steps into the corner's remnant on the whole
+/// quarter of its circle that faces the corner (about 95° at any spacing: the curve before it
+/// swept only its own corner disk there). With fillets of 0.4·R, moved a level's spacing `s`
+/// along the bisector at a time, the tool meets about the reference engagement of a stepover
+/// of 4·s there (a 90° corner, by a fine raster of the cuts: 35°, 52° and 75° at s = 0.05,
+/// 0.1 and 0.2·R, whose references are 37°, 53° and 78°).
+const CORNER_LEVEL: f64 = 0.4;
+
+/// Ratio of the fillet radii of the corner passes that take the corners from the level
+/// curves' fillets ([`CORNER_LEVEL`]) down to the wall contour's: each pass along the wall
+/// contour rounded to the next smaller radius meets about 35° of its circle in a 90° corner,
+/// whatever the radius (the same raster; the apex advances by (√2 − 1)·0.3·ρ).
+const CORNER_RATIO: f64 = 0.7;
+
+/// Most corner passes between the level curves and the wall contour (0.4·R down to 0.015·R).
+const CORNER_PASSES: usize = 10;
 
 /// The area the passes sweep, slightly under-estimated (simplified within 5 µm, tool radius
 /// less 10 µm): leftovers are then over-estimated by slivers that [`leftover`] drops.
@@ -53,7 +80,7 @@ pub fn passes(g: &LayerGeom, climb: bool, existing: &[Pass]) -> Vec<Pass> {
         if left.is_empty() {
             break;
         }
-        let new = level_curves(g, climb, &left, g.step / f64::from(1u32 << refine));
+        let new = level_curves(g, climb, &left, g.step / f64::from(1u32 << refine), 0.0);
         if new.is_empty() {
             break;
         }
@@ -78,8 +105,12 @@ pub fn passes_for_leftover(g: &LayerGeom, climb: bool, opts: &AdaptiveOptions, l
         return Vec::new();
     }
     let left = left.simplified(cell);
-    let mut out =
-        if left.is_empty() { Vec::new() } else { level_curves(g, climb, &left.offset(cell, ZONE_TOL), g.step / 4.0) };
+    let level_rho = if opts.corner_fillets { CORNER_LEVEL * g.r } else { 0.0 };
+    let mut out = if left.is_empty() {
+        Vec::new()
+    } else {
+        level_curves(g, climb, &left.offset(cell, ZONE_TOL), g.step / 4.0, level_rho)
+    };
     // the wall contour itself, last: what is left against the walls
     if !g.keep.is_empty() {
         // (the wall contour is the edge of the centres' region: clip by the leftover's reach
@@ -109,15 +140,84 @@ pub fn passes_for_leftover(g: &LayerGeom, climb: bool, opts: &AdaptiveOptions, l
         } else {
             0.0
         };
+        // from the level curves' fillets down to the wall contour's, in the corners only
+        let mut corner = level_rho;
+        let mut between = Vec::new();
+        while corner > rho * 1.05 && between.len() < CORNER_PASSES && !left.is_empty() {
+            between.push(corner);
+            corner *= CORNER_RATIO;
+        }
+        out.extend(corner_passes(g, climb, &between, &zone));
         let rings = round_corners(&g.walls, rho);
         out.extend(super::offset::rings_passes(&rings, g.wall_level, &zone, climb, true, PassKind::Cleanup));
     }
     out
 }
 
+/// Passes along the wall contour rounded to each radius of `radii` (largest first) near the
+/// corners those fillets round (from [`CORNER_LEAD`]·R before the largest fillet to as far
+/// after it), within `zone`.
+///
+/// Where each radius gives one piece near a corner (or a group of corners closer than that),
+/// the pieces, radius after radius, make one pass, each joined to the next by a chord: both
+/// ends lie on the walls' contour, so the chord crosses the space the piece before cleared.
+/// Where a chord would leave the centres' region or run longer than 3·R, the pieces stay
+/// passes of their own. Levels a hair above the wall contour's (larger radii higher) keep them
+/// before it and in their order through the linker.
+fn corner_passes(g: &LayerGeom, climb: bool, radii: &[f64], zone: &Area) -> Vec<Pass> {
+    if radii.is_empty() {
+        return Vec::new();
+    }
+    let level = |j: usize| g.wall_level + 1e-6 * (radii.len() - j) as f64;
+    let rings: Vec<Vec<Vec<DVec2>>> = radii.iter().map(|&rj| round_corners(&g.walls, rj)).collect();
+    // the largest fillets fill the most: each corner is a piece of their fill
+    let fills = Area::from_rings(&rings[0], Fill::EvenOdd).difference(&g.walls).without_slivers(1e-4);
+    let near = fills.offset(CORNER_LEAD * g.r, ZONE_TOL).intersection(zone);
+    let inside = g.centres_grown(CHORD_TOL);
+    let mut out = Vec::new();
+    for corner in near.components() {
+        let pieces: Vec<Vec<Pass>> = rings
+            .iter()
+            .enumerate()
+            .map(|(j, r)| super::offset::rings_passes(r, level(j), &corner, climb, true, PassKind::Cleanup))
+            .filter(|p| !p.is_empty())
+            .collect();
+        // one piece a radius (or else the linker links them)
+        let all: Vec<&Pass> = pieces.iter().flatten().collect();
+        let chords_ok = !all.is_empty()
+            && pieces.iter().all(|p| p.len() == 1)
+            && all.iter().all(|p| !p.closed && p.pts.len() >= 2)
+            && all.windows(2).all(|w| {
+                let (a, b) = (*w[0].pts.last().unwrap_or(&DVec2::ZERO), w[1].pts[0]);
+                a.distance(b) <= 3.0 * g.r
+                    && inside.clip_polyline(&[a, b]).iter().map(|p| crate::geom::polyline_length(p)).sum::<f64>()
+                        >= a.distance(b) - 1e-9
+            });
+        if chords_ok {
+            let pts: Vec<DVec2> = all.iter().flat_map(|p| p.pts.iter().copied()).collect();
+            out.push(Pass { pts, closed: false, kind: PassKind::Cleanup, level: level(0), reversible: false });
+        } else {
+            // (pieces of one radius share a level: the linker takes the larger radii first)
+            out.extend(pieces.into_iter().flatten());
+        }
+    }
+    out
+}
+
+/// Length of the wall contour each corner pass of [`corner_passes`] runs before and after its
+/// largest fillet, as a fraction of the tool radius: enough to take the sliver between one
+/// fillet's tangent point and the next one's, short enough that the chord back is short.
+const CORNER_LEAD: f64 = 0.1;
+
+/// How far a chord of [`corner_passes`] may stray outside the centres' region (its ends lie on
+/// that region's edge), mm.
+const CHORD_TOL: f64 = 0.002;
+
 /// Level curves of the wall distance (or of the stock outline without walls) at spacing
 /// `step`, clipped to where the tool touches `left`, farthest from the walls first.
-fn level_curves(g: &LayerGeom, climb: bool, left: &Area, step: f64) -> Vec<Pass> {
+///
+/// `rho` rounds the corners where the walls close round the tool ([`round_corners`]).
+fn level_curves(g: &LayerGeom, climb: bool, left: &Area, step: f64, rho: f64) -> Vec<Pass> {
     let zone = left.offset(g.r, ZONE_TOL).intersection(&g.centres);
     let mut new = Vec::new();
     {
@@ -153,7 +253,12 @@ fn level_curves(g: &LayerGeom, climb: bool, left: &Area, step: f64) -> Vec<Pass>
                 if zone.difference(&grown).without_slivers(1e-6).is_empty() || k > 10_000 {
                     break;
                 }
-                new.extend(super::offset::ring_passes(&grown, level, &zone, climb, true, PassKind::Cleanup));
+                if rho > 0.0 {
+                    let rings = round_corners(&grown, rho);
+                    new.extend(super::offset::rings_passes(&rings, level, &zone, climb, true, PassKind::Cleanup));
+                } else {
+                    new.extend(super::offset::ring_passes(&grown, level, &zone, climb, true, PassKind::Cleanup));
+                }
                 k += 1;
             }
         }
