@@ -253,6 +253,13 @@ impl Area {
         parts.into_iter().map(|p| p.into_iter().map(|q| DVec2::new(q[0], q[1])).collect()).collect()
     }
 
+    /// True when the segment from `a` to `b` lies inside the area but for at most `slack` of
+    /// its length (the boundary excluded, as [`Area::clip_polyline`] excludes it).
+    pub fn holds_segment(&self, a: DVec2, b: DVec2, slack: f64) -> bool {
+        let inside: f64 = self.clip_polyline(&[a, b]).iter().map(|p| super::polyline_length(p)).sum();
+        inside >= (b - a).length() - slack
+    }
+
     /// True when there are no polygons.
     pub fn is_empty(&self) -> bool {
         self.polys.is_empty()
@@ -412,5 +419,16 @@ mod tests {
         assert_eq!(parts.len(), 2);
         let len: f64 = parts.iter().map(|p| crate::geom::polyline_length(p)).sum();
         assert!((len - 4.0).abs() < 1e-6);
+    }
+
+    /// A segment inside an L, one that cuts across its notch, and one along its edge.
+    #[test]
+    fn holds_a_segment_inside_not_one_that_leaves() {
+        let l = Area::rect(0.0, 0.0, 10.0, 4.0).union(&Area::rect(0.0, 0.0, 4.0, 10.0));
+        let p = DVec2::new;
+        assert!(l.holds_segment(p(1.0, 1.0), p(9.0, 3.0), 1e-9));
+        assert!(!l.holds_segment(p(2.0, 9.0), p(9.0, 2.0), 1e-9), "across the notch");
+        assert!(l.holds_segment(p(2.0, 9.0), p(9.0, 2.0), 5.0), "within a slack longer than the part outside");
+        assert!(!l.holds_segment(p(0.0, 1.0), p(0.0, 9.0), 1e-9), "along the edge (boundary excluded)");
     }
 }

@@ -189,9 +189,7 @@ fn corner_passes(g: &LayerGeom, climb: bool, radii: &[f64], zone: &Area) -> Vec<
             && all.iter().all(|p| !p.closed && p.pts.len() >= 2)
             && all.windows(2).all(|w| {
                 let (a, b) = (*w[0].pts.last().unwrap_or(&DVec2::ZERO), w[1].pts[0]);
-                a.distance(b) <= 3.0 * g.r
-                    && inside.clip_polyline(&[a, b]).iter().map(|p| crate::geom::polyline_length(p)).sum::<f64>()
-                        >= a.distance(b) - 1e-9
+                a.distance(b) <= 3.0 * g.r && inside.holds_segment(a, b, 1e-9)
             });
         if chords_ok {
             let pts: Vec<DVec2> = all.iter().flat_map(|p| p.pts.iter().copied()).collect();
@@ -253,12 +251,9 @@ fn level_curves(g: &LayerGeom, climb: bool, left: &Area, step: f64, rho: f64) ->
                 if zone.difference(&grown).without_slivers(1e-6).is_empty() || k > 10_000 {
                     break;
                 }
-                if rho > 0.0 {
-                    let rings = round_corners(&grown, rho);
-                    new.extend(super::offset::rings_passes(&rings, level, &zone, climb, true, PassKind::Cleanup));
-                } else {
-                    new.extend(super::offset::ring_passes(&grown, level, &zone, climb, true, PassKind::Cleanup));
-                }
+                // (at ρ = 0, the rings of `grown` as they are)
+                let rings = round_corners(&grown, rho);
+                new.extend(super::offset::rings_passes(&rings, level, &zone, climb, true, PassKind::Cleanup));
                 k += 1;
             }
         }

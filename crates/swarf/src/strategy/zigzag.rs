@@ -179,8 +179,7 @@ pub fn passes(g: &LayerGeom, climb: bool, angle_deg: f64) -> Vec<Pass> {
 /// when the two points are not on one boundary ring.
 fn boundary_link(g: &LayerGeom, a: DVec2, b: DVec2) -> Option<Vec<DVec2>> {
     let mid = (a + b) / 2.0;
-    let straight_ok = g.centres.contains(mid)
-        && g.centres.clip_polyline(&[a, b]).iter().map(|p| polyline_length(p)).sum::<f64>() >= (b - a).length() - 1e-6;
+    let straight_ok = g.centres.contains(mid) && g.centres.holds_segment(a, b, 1e-6);
     if straight_ok {
         return Some(Vec::new());
     }
