@@ -861,24 +861,20 @@ impl RasterSim {
     pub fn front_engagement(&self, c: DVec2, z: f64, dir: DVec2) -> f64 {
         let zq = (z + self.eps) as f32;
         let inward = (self.r - 0.5 * self.grid.res) / (self.r + 0.5 * self.grid.res);
-        let mut hit = 0usize;
-        for off in &self.circ {
-            if off.dot(dir) < 0.0 {
-                continue;
-            }
-            let Some((i, j)) = self.grid.cell_of(c + *off) else { continue };
-            let k = j * self.grid.nx + i;
-            let material = if self.p[k] > zq || self.s[k] == f32::NEG_INFINITY {
-                // the ring, half a pixel outside the tool, has crossed into the part or out of
-                // the stock: read half a pixel inside the tool instead (see above)
-                self.grid.cell_of(c + *off * inward).is_some_and(|(i, j)| self.s[j * self.grid.nx + i] > zq)
-            } else {
-                self.s[k] > zq
-            };
-            if material {
-                hit += 1;
-            }
-        }
+        let hit = self.ring_count(c, dir, |k, cell| {
+            let off = self.circ[k];
+            off.dot(dir) >= 0.0
+                && cell.is_some_and(|i| {
+                    if self.p[i] > zq || self.s[i] == f32::NEG_INFINITY {
+                        // the ring, half a pixel outside the tool, has crossed into the part
+                        // or out of the stock: read half a pixel inside the tool instead (see
+                        // above)
+                        self.grid.cell_of(c + off * inward).is_some_and(|(i, j)| self.s[j * self.grid.nx + i] > zq)
+                    } else {
+                        self.s[i] > zq
+                    }
+                })
+        });
         360.0 * hit as f64 / self.circ.len() as f64
     }
 
@@ -925,9 +921,20 @@ impl RasterSim {
     pub fn engagement_pixel(&self, c: DVec2, z: f64, dir: DVec2, current: Option<&Path>) -> f64 {
         let zq = (z + self.eps) as f32;
         let current = current.map(Fast::new);
-        // the points ahead: those within a quarter turn of the direction (the points stand
-        // at angles τ(k + ½)/n, so they are one run of indices, read with a point to spare at
-        // each end and the same test as a whole turn would make)
+        let hit = self.ring_count(c, dir, |k, cell| {
+            cell.is_some_and(|i| self.s[i] > zq)
+                && self.circ[k].dot(dir) >= 0.0
+                && current.as_ref().is_none_or(|p| p.distance(c + self.circ[k]) > self.r)
+        });
+        360.0 * hit as f64 / self.circ.len() as f64
+    }
+
+    /// How many points of the engagement ring ahead of `dir` (within a quarter turn of it, with
+    /// a point to spare at each end) `hit(k, cell)` counts, given each point's index and cell
+    /// (none off the grid), found as [`Grid::cell_of`] finds it but from the centre's position in
+    /// cells plus the point's offset in cells (no division per point).
+    fn ring_count(&self, c: DVec2, dir: DVec2, hit: impl Fn(usize, Option<usize>) -> bool) -> usize {
+        // the points stand at angles τ(k + ½)/n, so those ahead are one run of indices
         let n = self.circ.len();
         let step = std::f64::consts::TAU / n as f64;
         let mid = dir.y.atan2(dir.x) / step - 0.5;
@@ -938,12 +945,11 @@ impl RasterSim {
         let n = n as i64;
         let (a, b) = if lo < 0 { (lo + n, hi + n) } else { (lo, hi) };
         let run = if b >= n { [a..n, 0..b - n + 1] } else { [a..b + 1, 0..0] };
-        // the cell of a point, as `Grid::cell_of` finds it, from the centre's position in
-        // cells plus the point's offset in cells (no division per point)
+        let ks = run.into_iter().flat_map(|r| r.start as usize..r.end as usize);
         let g = &self.grid;
         let (fx0, fy0) = ((c.x - g.x0) / g.res, (c.y - g.y0) / g.res);
         let reach = self.circ_reach;
-        let hit = if fx0 >= reach && fy0 >= reach && fx0 + reach < g.nx as f64 && fy0 + reach < g.ny as f64 {
+        if fx0 >= reach && fy0 >= reach && fx0 + reach < g.nx as f64 && fy0 + reach < g.ny as f64 {
             // the whole ring lies on the grid (nearly always): each point's cell is the
             // centre's cell plus a fixed step, one on where the centre's place in its cell
             // passes the point's threshold — no conversion or bounds test per point
@@ -951,42 +957,19 @@ impl RasterSim {
             let (fx, fy) = (fx0 - ci as f64, fy0 - cj as f64);
             let base = (cj * g.nx + ci) as isize;
             let nx = g.nx as isize;
-            self.ring_hits(&run, c, dir, zq, current.as_ref(), |k| {
+            ks.filter(|&k| {
                 let rc = &self.circ_index[k];
-                Some((base + rc.step + (fx >= rc.tx) as isize + if fy >= rc.ty { nx } else { 0 }) as usize)
+                hit(k, Some((base + rc.step + (fx >= rc.tx) as isize + if fy >= rc.ty { nx } else { 0 }) as usize))
             })
+            .count()
         } else {
-            self.ring_hits(&run, c, dir, zq, current.as_ref(), |k| {
+            ks.filter(|&k| {
                 let (fx, fy) = (fx0 + self.circ_cells[k].x, fy0 + self.circ_cells[k].y);
                 let (i, j) = (fx as usize, fy as usize);
-                (fx >= 0.0 && fy >= 0.0 && i < g.nx && j < g.ny).then(|| j * g.nx + i)
+                hit(k, (fx >= 0.0 && fy >= 0.0 && i < g.nx && j < g.ny).then(|| j * g.nx + i))
             })
-        };
-        360.0 * hit as f64 / self.circ.len() as f64
-    }
-
-    /// The points of the engagement ring in `run` (indices) that count for
-    /// [`Self::engagement_pixel`] at `c` moving along `dir`: their cell (`cell(k)`, none off the
-    /// grid) holds material above `zq`, they lie ahead of the motion, and the current move
-    /// (`current`) has not swept them.
-    fn ring_hits(
-        &self,
-        run: &[std::ops::Range<i64>; 2],
-        c: DVec2,
-        dir: DVec2,
-        zq: f32,
-        current: Option<&Fast>,
-        cell: impl Fn(usize) -> Option<usize>,
-    ) -> usize {
-        let mut hit = 0;
-        for k in run.iter().flat_map(|r| r.start as usize..r.end as usize) {
-            hit += usize::from(
-                cell(k).is_some_and(|i| self.s[i] > zq)
-                    && self.circ[k].dot(dir) >= 0.0
-                    && current.is_none_or(|p| p.distance(c + self.circ[k]) > self.r),
-            );
+            .count()
         }
-        hit
     }
 
     /// Exact engagement (see [`ExactModel`]).
