@@ -104,6 +104,8 @@ impl<'a> Linker<'a> {
     ) -> Result<Self> {
         let mut sim = RasterSim::new(job, regions, sim_opts)?;
         sim.track_exact = false;
+        // the program is written with its coordinates rounded to the post's step
+        sim.cut_shrink = crate::post::COORD_STEP;
         Ok(Linker::with_model(job, link, sim, first))
     }
 }

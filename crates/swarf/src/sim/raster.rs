@@ -286,6 +286,11 @@ pub struct RasterSim {
     floor_eff: f64,
     /// Record cuts for exact engagement (off for planning-only models).
     pub track_exact: bool,
+    /// How much smaller than the tool [`Self::cut`] cuts (0 but in a planner's model): a
+    /// planner whose program is written with its coordinates rounded must not count as cut a
+    /// cell the written program leaves by the rounding (a rapid at depth was once planned
+    /// through such a cell, 0.2 µm outside the written moves' reach).
+    pub cut_shrink: f64,
     /// Level whose reachable material is counted in `reach_left` (see [`Self::begin_level`]).
     level_thr: f32,
     reach_left: usize,
@@ -411,6 +416,7 @@ impl RasterSim {
             part_top_eff,
             floor_eff,
             track_exact: true,
+            cut_shrink: 0.0,
             level_thr: f32::INFINITY,
             reach_left: 0,
             dirty: None,
@@ -615,7 +621,7 @@ impl RasterSim {
     /// Cuts the path into the material (and into the surely cut heights, when they are kept,
     /// by the radius less half a cell's diagonal).
     pub fn cut(&mut self, path: &Path) {
-        let r = self.r;
+        let r = self.r - self.cut_shrink;
         let rs = r - self.half_diag;
         let sure = !self.sure.is_empty();
         let (lo, hi) = path.bbox(r);
