@@ -91,6 +91,9 @@ pub(crate) struct Linker<'a, M = RasterSim> {
     /// at that level goes down one of them again, through space already cut, instead of
     /// plunging a second time.
     pub(crate) bores: Vec<(DVec2, f64)>,
+    /// The largest engagement a lateral entry may cut, degrees (see [`Self::enter`]): set by a
+    /// strategy that states a bound (adaptive: the reference + 20°); `None`, no limit.
+    pub(crate) entry_bound: Option<f64>,
 }
 
 impl<'a> Linker<'a> {
@@ -135,6 +138,7 @@ impl<'a, M: Material> Linker<'a, M> {
             step: job.stepover_mm(),
             precut: false,
             clear_margin: 0.0,
+            entry_bound: None,
             bores: Vec::new(),
         }
     }
@@ -486,7 +490,11 @@ impl<'a, M: Material> Linker<'a, M> {
         }
         // a lateral entry: land in free or cleared space close by and come in sideways
         // (paper 1 §4.5: entering tangent to the stock from free space before any plunge)
-        if let Some(p) = self.lateral_landing(start, z, 1.5 * r) {
+        // — unless the way in cuts heavier than the strategy's bound (a remnant the start
+        // stands deep in): a helix or a ramp then enters it, as an entry bore
+        if let Some(p) = self.lateral_landing(start, z, 1.5 * r)
+            && self.light_entry(p, start, z)
+        {
             self.land_and_approach(p, start, z);
             return;
         }
@@ -539,6 +547,19 @@ impl<'a, M: Material> Linker<'a, M> {
         }
         // nothing fits: plunge
         self.plunge(start, top, z, "no room for a helix or a ramp");
+    }
+
+    /// Does a straight lateral entry from `a` to `b` at `z` cut within the entry bound (see
+    /// [`Self::entry_bound`]), read against the stock as it is at points a cell apart?
+    fn light_entry(&self, a: DVec2, b: DVec2, z: f64) -> bool {
+        let len = (b - a).length();
+        let Some(bound) = self.entry_bound else { return true };
+        if len < 1e-9 {
+            return true;
+        }
+        let dir = (b - a) / len;
+        let n = (len / self.sim.grid().res).ceil().max(1.0) as usize;
+        (1..=n).all(|k| self.sim.front_engagement(a + dir * (len * k as f64 / n as f64), z, dir) <= bound)
     }
 
     /// The largest helix radius round `c` that keeps the tool off the part (the arc tolerance
@@ -893,19 +914,33 @@ mod tests {
         assert!(!noted(&l, "helix") && count(&l.tp.moves, MoveKind::Plunge) == 0);
     }
 
-    /// The pocket with a hole already cleared 2.5 mm from the start: the tool lands in it
-    /// (descending at the feed through cleared space) and comes in sideways, although a helix
-    /// would fit at the start; and where the start itself is in cleared space, it just
-    /// descends there.
+    /// The pocket with a hole already cleared 0.2 mm from the start, and the adaptive
+    /// strategy's bound on entries: the tool lands in the hole (descending at the feed through
+    /// cleared space) and comes in sideways, although a helix would fit at the start; where the
+    /// start stands 2.5 mm from the hole, the way in sideways would cut a slot (180°, over the
+    /// reference + 20°) and a helix enters instead; and where the start itself is in cleared
+    /// space, it just descends there.
     #[test]
     fn a_lateral_landing_from_cleared_space_comes_before_a_helix() {
         let p = Pocket::new(20.0, 10.0);
         let z = p.z();
-        let start = DVec2::new(8.5, 5.0);
-        let mut l = p.linker(start);
-        for y in [4.5, 5.5] {
-            clear_row(&mut l, z, y, 2.0, 6.0);
-        }
+        let fresh = |start: DVec2| {
+            let mut l = p.linker(start);
+            // (the adaptive strategy's: the reference + 20°)
+            l.entry_bound = Some(p.job.cutting.width.engagement_deg() + 20.0);
+            for y in [4.5, 5.5] {
+                clear_row(&mut l, z, y, 2.0, 6.0);
+            }
+            l
+        };
+        let deep = DVec2::new(8.5, 5.0);
+        let mut l = fresh(deep);
+        l.enter(deep, &[deep, DVec2::new(15.0, 5.0)], z, 0.01);
+        assert!(!noted(&l, "lateral entry") && noted(&l, "helix"), "{:?}", l.tp.notes);
+        assert_eq!(l.tp.end(), deep.extend(z));
+        let start = DVec2::new(6.2, 5.0);
+        let mut l = fresh(start);
+        assert!(l.top_near(start, l.r + LANDING_MARGIN) > z + 0.01, "material within the tool's reach at the start");
         l.enter(start, &[start, DVec2::new(15.0, 5.0)], z, 0.01);
         assert!(noted(&l, "lateral entry") && !noted(&l, "helix"), "{:?}", l.tp.notes);
         assert_eq!(count(&l.tp.moves, MoveKind::Entry) + count(&l.tp.moves, MoveKind::Plunge), 0);
