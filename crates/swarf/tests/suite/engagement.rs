@@ -580,3 +580,33 @@ fn the_clean_up_takes_a_pockets_corners_within_the_bound() {
     assert!(all <= bound, "{all:.1}° in the program, above the reference + 20° ({bound:.1}°)");
     assert!(rep.rest_fraction < 0.002, "rest {:.4}", rep.rest_fraction);
 }
+
+/// The default adaptive program of every example case stays within the reference + 20°
+/// outside the entry bores, by the simulator's exact reading. A step of constant engagement
+/// used to be read only at its end: turning sharply toward the material (at a pass's end,
+/// round a thin remnant) it crossed a sliver of stock that read 80–87° a quarter of the way
+/// along and had been passed by the step's end (pocket_islands 80.7° at 53°, boss_with_clamp
+/// 86.8° at 60°).
+#[test]
+fn every_example_keeps_its_adaptive_program_within_the_bound() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cases");
+    let mut bad = Vec::new();
+    for name in
+        ["pocket_islands", "boss_with_clamp", "simple_part", "square_pocket", "l_pocket", "round_pocket", "narrow_slot"]
+    {
+        let job = swarf::io::load_job(&dir.join(format!("{name}.json")), &Default::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let out = rough(&job, &RoughOptions::default(), &mut |_, _| {}).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let rp = out.replay.as_ref().expect("simulated");
+        let lateral: Vec<f64> =
+            rp.samples.iter().filter(|s| s.kind == SampleKind::Lateral && !s.bore).map(|s| f64::from(s.tea)).collect();
+        let max = lateral.iter().copied().fold(0.0, f64::max);
+        let bound = out.report.engagement_ref_deg + 20.0;
+        eprintln!("{name}: {max:.1}° at most, bound {bound:.1}°, {} samples", lateral.len());
+        assert!(lateral.len() > 1000, "{name}: {} samples", lateral.len());
+        if max > bound {
+            bad.push(format!("{name}: {max:.1}° above the reference + 20° ({bound:.1}°)"));
+        }
+    }
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}

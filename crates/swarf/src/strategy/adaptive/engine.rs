@@ -366,9 +366,12 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
                         let dir = self.contour_direction(q, t, st.alpha);
                         let (n, t2) = self.c.walls.at(ring, s + dir * self.c.step);
                         let e = self.l.sim.front_engagement(n, z, t2 * dir);
-                        // and the step onto the wall must not be heavy either
+                        // and the step onto the wall must not be heavy either, at its end or
+                        // on its way
                         let e_q = if (q - st.c).length() > 1e-6 {
-                            self.l.sim.front_engagement(q, z, (q - st.c).normalize())
+                            let d = q - st.c;
+                            let e_end = self.l.sim.front_engagement(q, z, d.normalize());
+                            e_end.max(self.along_engagement(st.c, d.y.atan2(d.x), d.length()))
                         } else {
                             0.0
                         };

@@ -105,12 +105,35 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
     pub(super) fn engage_step_of(&mut self, c: DVec2, alpha_p: f64, step: f64) -> EngageStep {
         let Some(guess) = self.direction(c, alpha_p) else { return EngageStep::Done };
         // keep the heading within the front half of the previous direction
-        let toward = if self.c.climb { -1.0 } else { 1.0 };
         let lim = FRAC_PI_2;
         let guess = alpha_p + wrap_pi(guess - alpha_p).clamp(-lim, lim);
+        // the heading by the engagement at the step's end; where the step so found crosses a
+        // sliver heavier than that on its way, the heading again by the engagement along it
+        // (kept as it was where every heading crosses one: ending the pass there leaves the
+        // sliver to the clean-up, which takes it at full width)
+        let Some(mut alpha) = self.heading(c, alpha_p, guess, step, false) else { return EngageStep::Done };
+        if self.along_engagement(c, alpha, step) > self.c.theta + STEP_SLACK_DEG
+            && let Some(a) = self.heading(c, alpha_p, guess, step, true)
+        {
+            alpha = a;
+        }
+        let n = c + DVec2::new(alpha.cos(), alpha.sin()) * step;
+        if !self.allowed(n) || !self.step_allowed(c, n) {
+            return EngageStep::Wall;
+        }
+        EngageStep::Moved(n, alpha)
+    }
+
+    /// The heading search of [`Self::engage_step_of`] from the direction of eq. 9 (`guess`),
+    /// reading the engagement at the step's end, and along the step too when `along`; `None`
+    /// when every heading of the front half is too heavy.
+    fn heading(&self, c: DVec2, alpha_p: f64, guess: f64, step: f64, along: bool) -> Option<f64> {
+        let toward = if self.c.climb { -1.0 } else { 1.0 };
+        let lim = FRAC_PI_2;
         let eval = |me: &Self, a: f64| {
             let u = DVec2::new(a.cos(), a.sin());
-            me.l.sim.front_engagement(c + u * step, me.z, u)
+            let e = me.l.sim.front_engagement(c + u * step, me.z, u);
+            if along { e.max(me.along_engagement(c, a, step)) } else { e }
         };
         let e0 = eval(self, guess);
         let mut alpha = guess;
@@ -123,7 +146,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
                 // heavy, when the pass ends here (another start takes the material from a
                 // better side)
                 if e1 > self.c.theta + HEAVY_DEG {
-                    return EngageStep::Done;
+                    return None;
                 }
                 alpha = end;
             } else {
@@ -164,11 +187,18 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
                 alpha = if e0 > self.c.theta { hi } else { lo };
             }
         }
-        let n = c + DVec2::new(alpha.cos(), alpha.sin()) * step;
-        if !self.allowed(n) || !self.step_allowed(c, n) {
-            return EngageStep::Wall;
-        }
-        EngageStep::Moved(n, alpha)
+        Some(alpha)
+    }
+
+    /// The larger engagement at a third and at two thirds of a step of `step` from `c` along
+    /// heading `a`, against the stock as it is. A step that turns toward the material (at a
+    /// pass's end, round a thin remnant) can cross a sliver of stock that reads far above the
+    /// reference a third of the way along and has been passed by the step's end.
+    pub(super) fn along_engagement(&self, c: DVec2, a: f64, step: f64) -> f64 {
+        let u = DVec2::new(a.cos(), a.sin());
+        [1.0 / 3.0, 2.0 / 3.0]
+            .iter()
+            .fold(0.0, |m: f64, t| m.max(self.l.sim.front_engagement(c + u * (step * t), self.z, u)))
     }
 
     /// The shorter step of constant engagement at `c`, where a full one (`0.1·D`) runs into a
@@ -199,7 +229,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
             if !self.allowed(n) || !self.step_allowed(c, n) {
                 continue;
             }
-            let e = self.l.sim.front_engagement(n, self.z, u);
+            let e = self.l.sim.front_engagement(n, self.z, u).max(self.along_engagement(c, a, self.c.step));
             if e <= self.c.theta + STEP_SLACK_DEG && e > AIR_DEG {
                 return Some((n, a));
             }
