@@ -169,10 +169,17 @@ fn corner_passes(g: &LayerGeom, climb: bool, radii: &[f64], zone: &Area) -> Vec<
         return Vec::new();
     }
     let level = |j: usize| g.wall_level + 1e-6 * (radii.len() - j) as f64;
-    let rings: Vec<Vec<Vec<DVec2>>> = radii.iter().map(|&rj| round_corners(&g.walls, rj)).collect();
     // the largest fillets fill the most: each corner is a piece of their fill
-    let fills = Area::from_rings(&rings[0], Fill::EvenOdd).difference(&g.walls).without_slivers(1e-4);
+    let first = round_corners(&g.walls, radii[0]);
+    let fills = Area::from_rings(&first, Fill::EvenOdd).difference(&g.walls).without_slivers(1e-4);
     let near = fills.offset(CORNER_LEAD * g.r, ZONE_TOL).intersection(zone);
+    // (the smaller radii only where a corner stands in the zone: each is a closing of the whole
+    // layer's walls, most of a small clean-up's planning)
+    if near.is_empty() {
+        return Vec::new();
+    }
+    let rings: Vec<Vec<Vec<DVec2>>> =
+        std::iter::once(first).chain(radii[1..].iter().map(|&rj| round_corners(&g.walls, rj))).collect();
     let inside = g.centres_grown(CHORD_TOL);
     let mut out = Vec::new();
     for corner in near.components() {
