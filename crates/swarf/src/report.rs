@@ -47,6 +47,11 @@ impl Stats {
     }
 }
 
+/// How far above the reference engagement a program's engagement outside the entry bores may
+/// go, degrees: the bound swarf's adaptive programs are held to and the report measures against
+/// ([`Report::above_ref_plus_20`]).
+pub const BOUND_OVER_REF_DEG: f64 = 20.0;
+
 /// Time and length spent above a threshold.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct Above {
@@ -222,7 +227,7 @@ pub fn fill(rep: &mut Report, tp: &Toolpath, replay: &Replay, rest: &Rest, rapid
     rep.engagement_lateral_deg = Stats::of(lateral.iter().map(|s| s.tea as f64).collect());
     rep.engagement_deg = Stats::of(lateral.iter().filter(|s| !s.bore).map(|s| s.tea as f64).collect());
     rep.engagement_pixel_deg = Stats::of(lateral.iter().filter(|s| !s.bore).map(|s| s.tea_pixel as f64).collect());
-    let thr = rep.engagement_ref_deg + 20.0;
+    let thr = rep.engagement_ref_deg + BOUND_OVER_REF_DEG;
     let total_time: f64 = replay.samples.iter().map(|s| s.len as f64 / s.feed.max(1e-9) as f64).sum();
     let mut above = Above { threshold_deg: thr, ..Default::default() };
     let mut air = 0.0;

@@ -550,10 +550,16 @@ impl<'a, M: Material> Linker<'a, M> {
     }
 
     /// Does a straight lateral entry from `a` to `b` at `z` cut within the entry bound (see
-    /// [`Self::entry_bound`]), read against the stock as it is at points a cell apart?
+    /// [`Self::entry_bound`])?
     fn light_entry(&self, a: DVec2, b: DVec2, z: f64) -> bool {
+        self.entry_bound.is_none_or(|bound| self.cuts_within(a, b, z, bound))
+    }
+
+    /// Does the straight cut from `a` to `b` at `z` engage at most `bound` degrees, read by the
+    /// front half against the stock as it is (which over-reads every point after the first) at
+    /// points a cell apart, the end included?
+    pub(crate) fn cuts_within(&self, a: DVec2, b: DVec2, z: f64, bound: f64) -> bool {
         let len = (b - a).length();
-        let Some(bound) = self.entry_bound else { return true };
         if len < 1e-9 {
             return true;
         }
@@ -927,7 +933,7 @@ mod tests {
         let fresh = |start: DVec2| {
             let mut l = p.linker(start);
             // (the adaptive strategy's: the reference + 20°)
-            l.entry_bound = Some(p.job.cutting.width.engagement_deg() + 20.0);
+            l.entry_bound = Some(p.job.cutting.width.engagement_deg() + crate::report::BOUND_OVER_REF_DEG);
             for y in [4.5, 5.5] {
                 clear_row(&mut l, z, y, 2.0, 6.0);
             }

@@ -291,7 +291,7 @@ fn level_curves(g: &LayerGeom, climb: bool, left: &Area, step: f64, rho: f64) ->
                     Some(w) if concave_near(&grown) => match closing_rings(&grown.intersection(w), rho) {
                         Some((rings, filled)) if filled > FILL_MIN * rho * rho => rings,
                         Some(_) => grown.rings().cloned().collect(),
-                        None => grown.rings().map(|r| fillet_away(r, rho)).collect(),
+                        None => fillet_rings(&grown, rho),
                     },
                     _ => grown.rings().cloned().collect(),
                 };
@@ -357,7 +357,13 @@ fn away_turns(ring: &[DVec2]) -> Vec<f64> {
 /// φ/2) at a turn by φ) or changes the number of contours, each contour is rounded vertex by
 /// vertex instead ([`fillet_away`]).
 fn round_corners(walls: &Area, rho: f64) -> Vec<Vec<DVec2>> {
-    closing_rings(walls, rho).map_or_else(|| walls.rings().map(|r| fillet_away(r, rho)).collect(), |(rings, _)| rings)
+    closing_rings(walls, rho).map_or_else(|| fillet_rings(walls, rho), |(rings, _)| rings)
+}
+
+/// The wall contours of `walls` rounded vertex by vertex ([`fillet_away`]), where their closing
+/// would shut a channel.
+fn fillet_rings(walls: &Area, rho: f64) -> Vec<Vec<DVec2>> {
+    walls.rings().map(|r| fillet_away(r, rho)).collect()
 }
 
 /// Least area, as a fraction of ρ², that the closing in [`level_curves`] must fill near its

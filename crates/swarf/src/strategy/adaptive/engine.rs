@@ -517,17 +517,14 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         // against the stock as it is, which over-reads every point after the first) stays
         // within the step's slack — a lift over it and a descent cost more than the cut
         let len = (p - cur.truncate()).length();
-        if self.l.down_at == Some(z) && len > 1e-9 && len <= 1.5 * self.l.step && self.step_allowed(cur.truncate(), p) {
-            let dir = (p - cur.truncate()) / len;
-            let n = (len / self.l.sim.grid().res).ceil().max(1.0) as usize;
-            let light = (1..=n).all(|k| {
-                let q = cur.truncate() + dir * (len * k as f64 / n as f64);
-                self.l.sim.front_engagement(q, z, dir) <= self.c.theta + STEP_SLACK_DEG
-            });
-            if light {
-                self.l.push_line(MoveKind::Cut, p.extend(z), self.l.feed);
-                return;
-            }
+        if self.l.down_at == Some(z)
+            && len > 1e-9
+            && len <= 1.5 * self.l.step
+            && self.step_allowed(cur.truncate(), p)
+            && self.l.cuts_within(cur.truncate(), p, z, self.c.theta + STEP_SLACK_DEG)
+        {
+            self.l.push_line(MoveKind::Cut, p.extend(z), self.l.feed);
+            return;
         }
         // round the material that stands on the straight way, at depth through cleared space
         if self.l.down_at == Some(z) && self.l.link_around(p, z) {

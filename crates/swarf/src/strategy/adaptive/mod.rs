@@ -153,7 +153,7 @@ impl<'a, F: FnMut(&mut Linker<'a>, f64)> Levels<'a> for AdaptiveLevels<'_, F> {
     fn begin(&mut self, l: &mut Linker<'a>) -> Result<()> {
         l.clear_margin = 0.75 * l.sim.grid.res;
         // the clean-up's entries hold the bound the passes are held to
-        l.entry_bound = Some(self.job.cutting.width.engagement_deg() + 20.0);
+        l.entry_bound = Some(self.job.cutting.width.engagement_deg() + crate::report::BOUND_OVER_REF_DEG);
         self.setup = Some(Setup::new(l, self.job, self.geom, self.opts));
         Ok(())
     }
