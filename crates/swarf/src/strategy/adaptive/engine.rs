@@ -143,6 +143,8 @@ pub(super) struct Engine<'a, 'b, M: Material> {
     /// Lateral starts may stand anywhere in a coarse block, not only at its centre (set when
     /// the centres give no start on a level).
     pub(super) relaxed: bool,
+    /// Steps the passes of this level have taken.
+    pub(super) steps: usize,
 }
 
 impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
@@ -159,6 +161,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
             z: 0.0,
             why: "",
             relaxed: false,
+            steps: 0,
         }
     }
 
@@ -196,6 +199,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         self.resume.clear();
         self.failed.clear();
         self.relaxed = false;
+        self.steps = 0;
         self.coarse.clear();
         self.coarse_dist.clear();
         self.coarse_band.clear();
@@ -278,12 +282,21 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         let mut tr = Trace { pts: vec![st.c], rem: vec![0], last_cut: 1 };
         let mut steps = 0usize;
         let max_steps = 200_000;
+        // a pass that has cut nothing for four times the steps its air may last (`advance`
+        // ends one after a turn of air) is going round a place it cannot leave: onto a wall,
+        // off it again, which starts its air anew (a slot barely wider than the tool)
+        let idle_max = 4 * (TAU * self.c.r / self.c.step).ceil() as usize;
         loop {
             steps += 1;
             if steps > max_steps || !self.advance(&mut st, &mut tr) {
                 break;
             }
+            if tr.pts.len() - tr.last_cut > idle_max {
+                self.why = "going round without cutting";
+                break;
+            }
         }
+        self.steps += steps;
         tr.pts.truncate(tr.last_cut);
         tr.rem.truncate(tr.last_cut);
         self.emit(&tr.pts, &tr.rem, z);
@@ -576,12 +589,26 @@ pub(super) mod fixture {
 
     impl Pocket {
         pub(in super::super) fn new(climb: bool) -> Pocket {
-            let part = Area::rect(-5.0, -5.0, 25.0, 15.0).difference(&Area::rect(0.0, 0.0, 20.0, 10.0));
-            let mut job = Job::new("pocket", Area::rect(0.0, 0.0, 20.0, 10.0), part, 4.0, 2.0);
             // (the tests' geometry is drawn for a 40 % stepover, 78.5°)
-            job.cutting.width = crate::model::Width::Stepover(0.4);
+            Pocket::shaped(Area::rect(0.0, 0.0, 20.0, 10.0), 4.0, 2.0, 0.4, 0.05, climb)
+        }
+
+        /// The pocket `pocket` (its walls a frame of part 5 mm wide round it), `depth` deep, a
+        /// tool of diameter `d` at `stepover`, planned on cells of `res`.
+        pub(in super::super) fn shaped(
+            pocket: Area,
+            d: f64,
+            depth: f64,
+            stepover: f64,
+            res: f64,
+            climb: bool,
+        ) -> Pocket {
+            let (lo, hi) = pocket.bounds().expect("a pocket");
+            let part = Area::rect(lo.x - 5.0, lo.y - 5.0, hi.x + 5.0, hi.y + 5.0).difference(&pocket);
+            let mut job = Job::new("pocket", pocket, part, d, depth);
+            job.cutting.width = crate::model::Width::Stepover(stepover);
             let link = LinkOptions { climb, ..LinkOptions::DEFAULT };
-            let sim = SimOptions { res: Some(0.05), ..SimOptions::DEFAULT };
+            let sim = SimOptions { res: Some(res), ..SimOptions::DEFAULT };
             let opts = AdaptiveOptions::DEFAULT;
             let margin = Strategy::Adaptive(opts.clone()).wall_margin(&link);
             let regions = job.regions(job.radius(), margin).expect("the pocket's regions");
@@ -670,5 +697,35 @@ mod tests {
                 assert!(e.l.sim.reach_left() < before.1, "climb {climb}, step {k}: nothing cut");
             }
         }
+    }
+
+    /// A curved slot (radii 14 to 17.49 mm over 90°, round ends) 0.49 mm wider than the Ø3
+    /// tool, 3 mm deep: where the tool cannot leave a place, onto the wall and off it again
+    /// (which starts its air anew), circling ahead of material it cannot reach, the pass ends
+    /// within a few turns; it had gone round 200 000 steps, most of the level's planning.
+    #[test]
+    fn a_pass_that_goes_round_without_cutting_ends() {
+        let (r0, w) = (14.0, 3.49);
+        let at = |r: f64, deg: f64| r * DVec2::new(deg.to_radians().cos(), deg.to_radians().sin());
+        let end = |deg: f64, from: f64| {
+            let c = at(r0 + 0.5 * w, deg);
+            (0..=90).map(move |k| c + at(0.5 * w, from - 2.0 * k as f64))
+        };
+        let ring: Vec<DVec2> = (0..=180)
+            .map(|k| at(r0, 20.0 + 0.5 * k as f64))
+            .chain(end(110.0, 290.0))
+            .chain((0..=180).map(|k| at(r0 + w, 110.0 - 0.5 * k as f64)))
+            .chain(end(20.0, 20.0))
+            .collect();
+        let slot = crate::geom::Area::from_rings(&[ring], crate::geom::area::Fill::NonZero);
+        let p = Pocket::shaped(slot, 3.0, 3.0, 0.25, 0.03, true);
+        let z = p.z();
+        let mut l = p.linker();
+        let c = p.setup(&l);
+        let mut e = engine(&mut l, &c, z);
+        let passes = e.level(z);
+        assert!(!passes.is_empty());
+        // the slot is 24.7 mm long at its middle: a step of a quarter of 0.3 mm is 330 steps
+        assert!(e.steps < 20_000, "{} steps", e.steps);
     }
 }
