@@ -428,10 +428,16 @@ impl<'a, M: Material> Linker<'a, M> {
                     self.link_clear(start, z, t);
                     arrived = true;
                 } else if len <= (1.5 * self.step).max(0.5 * self.r) {
-                    // a short step: a lateral entry into the pass
-                    self.push_line(MoveKind::Cut, start.extend(z), self.feed);
-                    arrived = true;
-                } else if let Some((m, t)) = self.clear_until_near(cur.truncate(), start, z) {
+                    // a short step: a lateral entry into the pass (unless it cuts heavier than
+                    // the strategy's bound: a remnant on its way; the entry below then finds
+                    // another way in)
+                    if self.light_entry(cur.truncate(), start, z) {
+                        self.push_line(MoveKind::Cut, start.extend(z), self.feed);
+                        arrived = true;
+                    }
+                } else if let Some((m, t)) = self.clear_until_near(cur.truncate(), start, z)
+                    && self.light_entry(m, start, z)
+                {
                     // a way through cleared space that only meets material on arriving: a link
                     // to a tool diameter before it, then a lateral entry
                     self.link_clear(m, z, t);
@@ -965,6 +971,42 @@ mod tests {
         let down = &l.tp.moves[before..];
         assert!(down.iter().all(|m| m.is_rapid() || m.kind == MoveKind::Descend), "{down:?}");
         assert_eq!(down.last().map(|m| (m.kind, m.to)), Some((MoveKind::Descend, at.extend(z))));
+    }
+
+    /// The tool down in a hole cleared in the pocket's stock, the next pass starting 0.9 mm on
+    /// into the stock beyond the hole's end: a short step, which the linker takes straight at
+    /// depth into the pass. Across the hole's round end that cuts a slot (180°): with the
+    /// adaptive strategy's bound on entries, the tool enters by a helix instead, and the
+    /// straight step stays for strategies without that bound.
+    #[test]
+    fn a_short_step_at_depth_into_a_pass_holds_the_entry_bound() {
+        let p = Pocket::new(20.0, 10.0);
+        let z = p.z();
+        let (here, start) = (DVec2::new(6.0, 5.0), DVec2::new(6.9, 5.0));
+        for bound in [true, false] {
+            let mut l = p.linker(here);
+            if bound {
+                l.entry_bound = Some(p.job.cutting.width.engagement_deg() + crate::report::BOUND_OVER_REF_DEG);
+            }
+            for y in [4.5, 5.5] {
+                clear_row(&mut l, z, y, 2.0, 6.0);
+            }
+            stand_at(&mut l, here, z);
+            assert!(!l.cuts_within(here, start, z, 100.0), "the step cuts lightly");
+            let n = l.tp.moves.len();
+            let pass = Pass {
+                pts: vec![start, DVec2::new(15.0, 5.0)],
+                closed: false,
+                kind: PassKind::Clear,
+                level: 0.0,
+                reversible: false,
+            };
+            l.pass(pass, z);
+            let straight = l.tp.moves[n].kind == MoveKind::Cut && l.tp.moves[n].to == start.extend(z);
+            assert_eq!(straight, !bound, "bound {bound}: {:?}", &l.tp.moves[n..]);
+            assert_eq!(noted(&l, "helix"), bound, "bound {bound}: {:?}", l.tp.notes);
+            assert_eq!(count(&l.tp.moves, MoveKind::Plunge), 0);
+        }
     }
 
     /// A square bore 0.8 mm wider than the tool and a pass that starts 0.35 mm off its centre:
