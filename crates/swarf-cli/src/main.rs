@@ -225,7 +225,7 @@ struct CommonOpts {
     #[arg(long)]
     no_simulate: bool,
     /// Measure the exact engagement at every sample of the simulation (slower) instead of
-    /// every R/12 along a move and wherever the pixel reading leaves it in doubt.
+    /// every R/6 along a move and wherever the pixel reading leaves it in doubt.
     #[arg(long, conflicts_with = "no_simulate")]
     exact_every_sample: bool,
     /// SVG pixels per inch (old Inkscape files use 90).

@@ -110,7 +110,8 @@ pub struct SimOptions {
     /// The engagement ring is `R + ring_delta` (mm) so that the wall the tool is cutting, at
     /// exactly `R`, does not read as material.
     pub ring_delta: f64,
-    /// Spacing of engagement samples along cutting moves, mm; `None` = `res / 2`.
+    /// Spacing of engagement samples along cutting moves, mm; `None` = `res` (a sample a cell:
+    /// the pixel ring reads the stock to a cell).
     pub sample_step: Option<f64>,
     /// Refuse grids larger than this many cells.
     pub max_cells: usize,
@@ -132,7 +133,7 @@ pub struct SimOptions {
     /// For [`SimEngine::Sdf`], `res` is the sample spacing of the fields.
     pub engine: SimEngine,
     /// Measure the exact engagement at every sample. Off, the raster engine measures it exactly
-    /// every `R/12` or so along a move and between those where the pixel reading is ambiguous,
+    /// every `R/6` or so along a move and between those where the pixel reading is ambiguous,
     /// and draws it along the line between them where the pixels show it changing smoothly
     /// (about a fifth of the work, the same statistics to a tenth of a degree on the examples).
     pub exact_every_sample: bool,
@@ -140,7 +141,7 @@ pub struct SimOptions {
 
 impl SimOptions {
     /// The cell size for the tool ([`SimOptions::res_for`]) within 20 million cells, 0.01 mm
-    /// gouge tolerance and engagement threshold, samples every half cell, at most 60 million
+    /// gouge tolerance and engagement threshold, a sample every cell, at most 60 million
     /// cells, the raster engine, the exact engagement where the pixels leave it in doubt.
     pub const DEFAULT: SimOptions = SimOptions {
         res: None,

@@ -367,7 +367,7 @@ impl SdfSim {
             tol: opts.tol,
             eps: opts.eps,
             ring_delta: opts.ring_delta,
-            sample_step: opts.sample_step.unwrap_or(h / 2.0),
+            sample_step: opts.sample_step.unwrap_or(h),
             stock_top: job.stock_top,
             floor_eff: job.floor + job.allowance_floor,
             part_top_eff: job.part_top + job.allowance_floor,

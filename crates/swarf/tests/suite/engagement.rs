@@ -490,7 +490,7 @@ fn pixel_follows_exact_on_a_real_program() {
     assert!(share >= 0.9, "only {:.1} % of samples agree within 5°", 100.0 * share);
 }
 
-/// The exact engagement measured every R/12 and where the pixels leave it in doubt (the
+/// The exact engagement measured every R/6 and where the pixels leave it in doubt (the
 /// default) against measuring it at every sample, on example programs: the same samples and
 /// pixel readings, the figures the report judges by (max, p95, mean) within half a degree, the
 /// median within one, and nearly every sample within 3°.

@@ -407,7 +407,7 @@ fn run(case: &Case) -> (Vec<String>, String) {
         strategy: case.strategy.clone(),
         link: case.link.clone(),
         // engagement samples every 0.5 mm: the figures checked here (gouges, collisions, rest,
-        // plunges) do not depend on them, and the default (res / 2) triples the time
+        // plunges) do not depend on them, and the default (a sample a cell) multiplies the time
         // (adaptive: every 0.1 mm, since its engagement percentiles are checked)
         sim: SimOptions {
             res: Some(case.res),
