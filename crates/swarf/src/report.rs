@@ -97,7 +97,8 @@ pub struct Report {
     pub levels: Vec<f64>,
     /// Time to compute the toolpath (s), simulation excluded.
     pub compute_s: f64,
-    /// Time to simulate it for this report (s).
+    /// Time to simulate it for this report (s): where the simulation replays the program while
+    /// it is planned (the raster proof of `rough`), the time it took after the planning ended.
     pub simulate_s: f64,
     /// Time from the start of the planning to the report: planning, posting and simulation (s).
     pub total_s: f64,

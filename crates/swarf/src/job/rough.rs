@@ -105,9 +105,124 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
     let opts = fitted.as_ref().unwrap_or(opts);
     let t0 = Instant::now();
     progress(Stage::Plan, 0.0);
-    let planned = plan(job, opts)?.ok_or_else(|| Error::job("strategy", "the strategy found nothing to cut"))?;
-    progress(Stage::Plan, 0.5);
-    rough_planned(job, opts, planned, t0, progress)
+    // the raster proof replays the program alongside its planning, piece by piece as the
+    // linker makes it (the spiral's search proves its own program)
+    let alongside = opts.simulate
+        && opts.sim.engine == crate::sim::SimEngine::Raster
+        && !matches!(opts.strategy, Strategy::Spiral(_));
+    if !alongside {
+        let planned = plan(job, opts)?.ok_or_else(nothing_to_cut)?;
+        progress(Stage::Plan, 0.5);
+        return rough_planned(job, opts, planned, t0, progress);
+    }
+    let (regions, geom) = geometry(job, opts)?;
+    let proof_regions = regions.clone();
+    /// Takes back the sender no linker took, also when the planning panics (the proof waits
+    /// for every sender to go).
+    struct Unstream;
+    impl Drop for Unstream {
+        fn drop(&mut self) {
+            crate::plan::linker::stream_next_program(None);
+        }
+    }
+    std::thread::scope(|s| {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let proof = s.spawn(|| prove_alongside(job, &proof_regions, &opts.sim, rx));
+        let unstream = Unstream;
+        crate::plan::linker::stream_next_program(Some(tx.clone()));
+        let planned = plan_on(job, opts, regions, &geom);
+        drop(unstream);
+        let planned = match planned {
+            Ok(Some(p)) => p,
+            // (the proof stops when every sender is gone)
+            Ok(None) => return Err(nothing_to_cut()),
+            Err(e) => return Err(e),
+        };
+        progress(Stage::Plan, 0.5);
+        // (a proof that stopped early is made again after the planning)
+        let _ = tx.send(crate::plan::linker::Streamed::End(planned.toolpath.clone()));
+        drop(tx);
+        rough_planned_with(job, opts, planned, t0, progress, Some(proof))
+    })
+}
+
+fn nothing_to_cut() -> Error {
+    Error::job("strategy", "the strategy found nothing to cut")
+}
+
+/// The proof of a program made while it is planned: the raster model of `job` replays each
+/// piece the linker sends as it plans ([`crate::plan::linker::stream_next_program`]), and the
+/// program's tail once it is planned. The pieces are rounded to the post's step as the whole
+/// program is, and the samples and events are numbered from the program's start, so the replay
+/// is the one [`crate::sim::simulate`] makes of the finished program, read piece by piece
+/// (`replay_carrying`, as the viewer reads a program). `None` where the pieces are not the
+/// beginning of the finished program, or the model cannot be built: the program is then
+/// proven after its planning.
+fn prove_alongside(
+    job: &Job,
+    regions: &crate::model::Regions,
+    sim: &SimOptions,
+    rx: std::sync::mpsc::Receiver<crate::plan::linker::Streamed>,
+) -> Option<(Replay, crate::sim::Rest)> {
+    use crate::plan::linker::Streamed;
+    use crate::toolpath::Move;
+    let mut model = match crate::sim::RasterSim::new(job, regions, sim) {
+        Ok(m) => m,
+        Err(e) => {
+            log::debug!("no proof alongside the planning: {e}");
+            return None;
+        }
+    };
+    // the moves as they come, each piece rounded as the whole program is (each move's ends
+    // and arc centre from the rounded end before it); `sent` the moves as planned
+    let mut sent: Vec<Move> = Vec::new();
+    let mut first: Option<crate::geom::DVec3> = None;
+    let mut ready: std::collections::VecDeque<(crate::geom::DVec3, Move)> = Default::default();
+    let (mut ended, mut whole) = (false, false);
+    let rounded = |start, moves: &[Move]| {
+        let mut piece = Toolpath::new(job.cutting.tool.clone(), start, 0.0);
+        piece.moves = moves.to_vec();
+        piece.quantize(post::COORD_STEP, post::CENTER_STEP);
+        piece.segments().map(|(from, m)| (from, *m)).collect::<Vec<_>>()
+    };
+    let moves = std::iter::from_fn(|| {
+        loop {
+            if let Some(s) = ready.pop_front() {
+                return Some(s);
+            }
+            if ended {
+                return None;
+            }
+            match rx.recv() {
+                Ok(Streamed::Piece { start, moves }) => {
+                    first.get_or_insert(start);
+                    ready.extend(rounded(start, &moves));
+                    sent.extend(moves);
+                }
+                Ok(Streamed::End(tp)) => {
+                    ended = true;
+                    let n = sent.len();
+                    if first.is_some_and(|f| f != tp.start) || tp.moves.len() < n || tp.moves[..n] != sent[..] {
+                        log::debug!("the moves proven alongside the planning are not the program's beginning");
+                        return None;
+                    }
+                    log::debug!("{n} of {} moves proven alongside the planning", tp.moves.len());
+                    ready.extend(rounded(sent.last().map_or(tp.start, |m| m.to), &tp.moves[n..]));
+                    whole = true;
+                }
+                // (the planning failed)
+                Err(_) => return None,
+            }
+        }
+    });
+    let mut carry = crate::sim::replay::Carry::default();
+    let mut rp = model.replay_segments(moves, 0, &mut |_| {}, &mut carry);
+    if !whole {
+        return None;
+    }
+    rp.rest_cells = model.rest_cells();
+    rp.res = model.grid.res;
+    Some((rp, model.rest()))
 }
 
 /// The second half of [`rough`]: posts a program [`plan`] made of `job` with `opts` and proves
@@ -121,6 +236,22 @@ pub fn rough_planned(
     started: Instant,
     progress: &mut dyn FnMut(Stage, f64),
 ) -> Result<RoughResult> {
+    rough_planned_with(job, opts, planned, started, progress, None)
+}
+
+/// The proof of a program made alongside its planning ([`prove_alongside`]).
+type Alongside<'s> = std::thread::ScopedJoinHandle<'s, Option<(Replay, crate::sim::Rest)>>;
+
+/// [`rough_planned`], with the proof made alongside the planning when there is one: its
+/// proving time is then the wait for it after the planning.
+fn rough_planned_with(
+    job: &Job,
+    opts: &RoughOptions,
+    planned: Planned,
+    started: Instant,
+    progress: &mut dyn FnMut(Stage, f64),
+    alongside: Option<Alongside<'_>>,
+) -> Result<RoughResult> {
     let Planned { mut toolpath, levels: zs, regions, proof, proof_s } = planned;
     toolpath.quantize(post::COORD_STEP, post::CENTER_STEP);
     // (a proof the strategy made while planning is proving time, not planning time)
@@ -132,7 +263,13 @@ pub fn rough_planned(
     let mut done = finish(toolpath, zs, &about, opts, compute_s, progress, |tp, progress| match proof {
         // (the strategy simulated this very program with these settings while planning it)
         Some(p) => Ok(p),
-        None => crate::sim::simulate(job, &regions, &opts.sim, tp, &mut |f| progress(Stage::Simulate, f)),
+        None => {
+            let made = alongside.map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
+            match made.flatten() {
+                Some(p) => Ok(p),
+                None => crate::sim::simulate(job, &regions, &opts.sim, tp, &mut |f| progress(Stage::Simulate, f)),
+            }
+        }
     })?;
     done.report.simulate_s += proof_s;
     done.report.total_s += proof_s;
@@ -323,4 +460,49 @@ pub(crate) fn plan_on(
         proof: program.proof,
         proof_s: program.proof_s,
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plan::linker::Streamed;
+
+    /// The proof alongside the planning, fed a planned program in pieces of 300 moves (from
+    /// the program's start, as the linker sends them) and then the whole program: the replay
+    /// and the rest of proving the finished program after its planning. Pieces that are not
+    /// the program's beginning (one move off by half a millimetre): no proof, so the program is
+    /// proven after its planning.
+    #[test]
+    fn the_proof_alongside_replays_the_pieces_as_the_whole_and_refuses_others() {
+        let case = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/cases/square_pocket.json");
+        let job = crate::io::load_job(case.as_ref(), &Default::default()).expect("the case");
+        let opts = RoughOptions::DEFAULT;
+        let planned = plan(&job, &opts).expect("planned").expect("a program");
+        let tp = &planned.toolpath;
+        assert!(tp.moves.len() > 1000, "{} moves", tp.moves.len());
+        let fed = |off: f64| {
+            let (tx, rx) = std::sync::mpsc::channel();
+            let mut at = tp.start;
+            for (k, chunk) in tp.moves[..tp.moves.len() - 10].chunks(300).enumerate() {
+                let mut moves = chunk.to_vec();
+                if k == 1 {
+                    moves[7].to.x += off;
+                }
+                tx.send(Streamed::Piece { start: at, moves }).expect("the proof listens");
+                at = chunk[chunk.len() - 1].to;
+            }
+            tx.send(Streamed::End(tp.clone())).expect("the proof listens");
+            drop(tx);
+            prove_alongside(&job, &planned.regions, &opts.sim, rx)
+        };
+        let (along, rest) = fed(0.0).expect("the pieces are the program's beginning");
+        let mut q = tp.clone();
+        q.quantize(post::COORD_STEP, post::CENTER_STEP);
+        let (after, rest_after) =
+            crate::sim::simulate(&job, &planned.regions, &opts.sim, &q, &mut |_| {}).expect("proven");
+        assert!(along.samples.len() > 10_000 && along.samples == after.samples);
+        assert_eq!((along.removed_volume, &along.rest_cells), (after.removed_volume, &after.rest_cells));
+        assert_eq!(rest, rest_after);
+        assert!(fed(0.5).is_none(), "a piece off the program");
+    }
 }

@@ -94,6 +94,45 @@ pub(crate) struct Linker<'a, M = RasterSim> {
     /// The largest engagement a lateral entry may cut, degrees (see [`Self::enter`]): set by a
     /// strategy that states a bound (adaptive: the reference + 20°); `None`, no limit.
     pub(crate) entry_bound: Option<f64>,
+    /// Where the moves go as they are planned, for a proof alongside the planning (see
+    /// [`stream_next_program`]).
+    stream: Option<Stream>,
+}
+
+/// What a proof alongside the planning receives ([`stream_next_program`]).
+#[derive(Debug)]
+pub(crate) enum Streamed {
+    /// The program's next moves, after `start`, as planned (not yet rounded to the post's
+    /// step).
+    Piece { start: DVec3, moves: Vec<crate::toolpath::Move> },
+    /// The whole program as planned: the moves not sent yet are its tail, and the pieces must
+    /// be its beginning.
+    End(Toolpath),
+}
+
+/// Moves a stream sends at a time.
+const STREAM_PIECE: usize = 512;
+
+/// A linker's stream: the sender, the moves sent, and whether the program's first move that
+/// stays was found.
+#[derive(Debug)]
+struct Stream {
+    tx: std::sync::mpsc::Sender<Streamed>,
+    sent: usize,
+    started: bool,
+}
+
+thread_local! {
+    static NEXT_STREAM: std::cell::RefCell<Option<std::sync::mpsc::Sender<Streamed>>> =
+        const { std::cell::RefCell::new(None) };
+}
+
+/// The next linker made on this thread sends its moves to `tx` as it plans them, in pieces
+/// ([`Streamed::Piece`]); `None` takes back a sender no linker took. A job's program is made
+/// by one linker (`plan::levels::drive`), so the proof can replay the program while it is
+/// planned.
+pub(crate) fn stream_next_program(tx: Option<std::sync::mpsc::Sender<Streamed>>) {
+    NEXT_STREAM.with(|s| *s.borrow_mut() = tx);
 }
 
 impl<'a> Linker<'a> {
@@ -139,6 +178,7 @@ impl<'a, M: Material> Linker<'a, M> {
             precut: false,
             clear_margin: 0.0,
             entry_bound: None,
+            stream: NEXT_STREAM.with(|s| s.borrow_mut().take()).map(|tx| Stream { tx, sent: 0, started: false }),
             bores: Vec::new(),
         }
     }
@@ -223,6 +263,7 @@ impl<'a, M: Material> Linker<'a, M> {
         {
             self.sim.cut(&Path::of(from, &m));
         }
+        self.send_moves();
     }
 
     pub(crate) fn push_arc(&mut self, kind: MoveKind, to: DVec3, center: DVec2, ccw: bool, feed: f64) {
@@ -236,6 +277,34 @@ impl<'a, M: Material> Linker<'a, M> {
         {
             self.sim.cut(&Path::of(from, &m));
         }
+        self.send_moves();
+    }
+
+    /// Sends the moves pushed since the last piece to the stream, if any, once there are
+    /// [`STREAM_PIECE`] of them: from the first move [`Self::finish`] keeps (it drops the
+    /// travel at the start height before the first move down), the piece starting where the
+    /// move before it ends.
+    fn send_moves(&mut self) {
+        let Some(st) = &mut self.stream else { return };
+        if !st.started {
+            let z0 = self.tp.start.z;
+            let Some(k) = self.tp.moves.iter().position(|m| !(m.is_rapid() && (m.to.z - z0).abs() < 1e-9)) else {
+                return;
+            };
+            (st.sent, st.started) = (k, true);
+        }
+        let n = self.tp.moves.len();
+        if n - st.sent < STREAM_PIECE {
+            return;
+        }
+        let start = if st.sent > 0 { self.tp.moves[st.sent - 1].to } else { self.tp.start };
+        let piece = Streamed::Piece { start, moves: self.tp.moves[st.sent..n].to_vec() };
+        if st.tx.send(piece).is_err() {
+            // (the proof has stopped: it proves the program once it is planned)
+            self.stream = None;
+            return;
+        }
+        st.sent = n;
     }
 
     /// Is the tool clear of the part along the XY segment at height z?
@@ -1007,6 +1076,40 @@ mod tests {
             assert_eq!(noted(&l, "helix"), bound, "bound {bound}: {:?}", l.tp.notes);
             assert_eq!(count(&l.tp.moves, MoveKind::Plunge), 0);
         }
+    }
+
+    /// A linker made after [`stream_next_program`] sends its moves in pieces of
+    /// [`STREAM_PIECE`] as it pushes them, from the first move its program keeps (the travel at
+    /// the start height before it is dropped by `finish`), each piece from where the move
+    /// before it ends: the pieces are the finished program's beginning.
+    #[test]
+    fn a_streaming_linker_sends_the_programs_beginning_in_pieces() {
+        let p = Pocket::new(20.0, 10.0);
+        let z = p.z();
+        let (tx, rx) = std::sync::mpsc::channel();
+        stream_next_program(Some(tx));
+        let mut l = p.linker(DVec2::new(2.0, 2.0));
+        let quiet = p.linker(DVec2::new(2.0, 2.0));
+        l.precut = true;
+        l.push_line(MoveKind::Rapid, DVec3::new(5.0, 5.0, l.safe_z), 0.0);
+        l.push_line(MoveKind::Descend, DVec3::new(5.0, 5.0, z), l.feed);
+        for k in 0..1200 {
+            let y = 5.0 + 0.001 * (k + 1) as f64;
+            l.push_line(MoveKind::Cut, DVec3::new(if k % 2 == 0 { 6.0 } else { 5.0 }, y, z), l.feed);
+        }
+        assert!(quiet.stream.is_none(), "only the first linker streams");
+        let tp = l.finish();
+        let pieces: Vec<Streamed> = rx.try_iter().collect();
+        assert_eq!(pieces.len(), 2, "{} pieces", pieces.len());
+        let mut at = 0;
+        for piece in pieces {
+            let Streamed::Piece { start, moves } = piece else { panic!("a piece") };
+            let before = if at == 0 { tp.start } else { tp.moves[at - 1].to };
+            assert_eq!(start, before);
+            assert!(moves.len() >= STREAM_PIECE && tp.moves[at..at + moves.len()] == moves[..]);
+            at += moves.len();
+        }
+        assert_eq!(tp.moves[0].kind, MoveKind::Descend, "the travel at the start height dropped");
     }
 
     /// A square bore 0.8 mm wider than the tool and a pass that starts 0.35 mm off its centre:

@@ -1062,6 +1062,18 @@ impl RasterSim {
         progress: &mut dyn FnMut(f64),
         carry: &mut super::replay::Carry,
     ) -> Replay {
+        self.replay_segments(tp.segments().map(|(from, m)| (from, *m)), tp.moves.len(), progress, carry)
+    }
+
+    /// [`RasterSim::replay_carrying`] of the moves `segments` gives as they come (each with
+    /// where it starts; about `nmoves` of them): a program replayed while it is planned.
+    pub(crate) fn replay_segments(
+        &mut self,
+        segments: impl Iterator<Item = (DVec3, crate::toolpath::Move)>,
+        nmoves: usize,
+        progress: &mut dyn FnMut(f64),
+        carry: &mut super::replay::Carry,
+    ) -> Replay {
         let stand_in = ExactModel::new(self.r, DVec2::ZERO, DVec2::ONE, Vec::new(), 0.0, 1.0);
         let model = std::mem::replace(&mut self.exact, stand_in);
         let (tx, rx) = std::sync::mpsc::sync_channel(8);
@@ -1075,7 +1087,7 @@ impl RasterSim {
                 answers: std::sync::Mutex::new(answers),
             });
             let replayed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                super::replay::run_carrying(self, tp, progress, carry)
+                super::replay::run_segments(self, segments, nmoves, progress, carry)
             }));
             // (dropping the sender ends the thread, also after a panic)
             self.feed.0 = None;

@@ -188,21 +188,34 @@ pub(crate) fn run_carrying<M: Engine>(
     progress: &mut dyn FnMut(f64),
     carry: &mut Carry,
 ) -> Replay {
+    run_segments(m_, tp.segments().map(|(from, m)| (from, *m)), tp.moves.len(), progress, carry)
+}
+
+/// [`run_carrying`] on the moves `segments` gives (each with where it starts), as they come:
+/// about `nmoves` of them (for `progress`).
+pub(crate) fn run_segments<M: Engine>(
+    m_: &mut M,
+    segments: impl Iterator<Item = (DVec3, crate::toolpath::Move)>,
+    nmoves: usize,
+    progress: &mut dyn FnMut(f64),
+    carry: &mut Carry,
+) -> Replay {
     let Carry { bore, entry_pts, entry_arc_center } = carry;
     let mut out = Replay::default();
     let mut cum = 0.0;
-    let nmoves = tp.moves.len().max(1);
+    let nmoves = nmoves.max(1);
     let r = m_.radius();
     let step = m_.sample_step();
     let slack = m_.spacing().max(0.05 * r);
     // samples whose engagement the engine measures after the replay
     let mut later: Vec<usize> = Vec::new();
     // every move, for the gouge test after the replay (the part does not change)
-    let mut paths: Vec<Path> = Vec::with_capacity(tp.moves.len());
-    for (mi, (from, m)) in tp.segments().enumerate() {
+    let mut paths: Vec<Path> = Vec::with_capacity(nmoves);
+    for (mi, (from, m)) in segments.enumerate() {
         if mi % 256 == 0 {
-            progress(mi as f64 / nmoves as f64);
+            progress((mi as f64 / nmoves as f64).min(1.0));
         }
+        let m = &m;
         let path = Path::of(from, m);
         let len3 = move_length(from, m);
         if m.kind == MoveKind::Entry || m.kind == MoveKind::Plunge {

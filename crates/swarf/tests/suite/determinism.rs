@@ -69,3 +69,35 @@ fn case_file_is_deterministic() {
         check(&job, &opts, &format!("l_pocket, {}", kind));
     }
 }
+
+/// `rough` proves a program while it is planned (the linker hands its moves to the proof in
+/// pieces): the same replay, sample for sample, and the same report as proving the finished
+/// program after its planning (`plan`, then `rough_planned`): adaptive programs of tens of
+/// pieces, and a zigzag program shorter than one (all of it the tail).
+#[test]
+fn the_proof_alongside_the_planning_is_the_proof_after_it() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/cases");
+    for (case, kind) in [("pocket_islands", "adaptive"), ("square_pocket", "adaptive"), ("l_pocket", "zigzag")] {
+        let job = swarf::io::load_job(&dir.join(format!("{case}.json")), &Default::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let opts = RoughOptions {
+            strategy: Strategy::from_name(kind).expect("a strategy"),
+            input_name: case.into(),
+            ..Default::default()
+        };
+        let what = format!("{case}, {kind}");
+        let along = rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{what}: {e}"));
+        let planned =
+            swarf::job::rough::plan(&job, &opts).unwrap_or_else(|e| panic!("{what}: {e}")).expect("a program");
+        let after = swarf::job::rough::rough_planned(&job, &opts, planned, std::time::Instant::now(), &mut |_, _| {})
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
+        let n = along.toolpath.moves.len();
+        assert!(if kind == "adaptive" { n > 2000 } else { n < 500 }, "{what}: {n} moves");
+        assert_eq!(along.gcode, after.gcode, "{what}: the program");
+        assert_eq!(untimed(&along.report), untimed(&after.report), "{what}: the report");
+        let (a, b) = (along.replay.as_ref().expect("simulated"), after.replay.as_ref().expect("simulated"));
+        assert!(a.samples == b.samples, "{what}: {} samples against {}", a.samples.len(), b.samples.len());
+        assert_eq!((&a.gouges, &a.rapid_collisions, &a.plunges), (&b.gouges, &b.rapid_collisions, &b.plunges));
+        assert_eq!((a.removed_volume, &a.rest_cells), (b.removed_volume, &b.rest_cells), "{what}");
+    }
+}
