@@ -150,14 +150,13 @@ fn nothing_to_cut() -> Error {
     Error::job("strategy", "the strategy found nothing to cut")
 }
 
-/// The proof of a program made while it is planned: the raster model of `job` replays each
-/// piece the linker sends as it plans ([`crate::plan::linker::stream_next_program`]), and the
-/// program's tail once it is planned. The pieces are rounded to the post's step as the whole
-/// program is, and the samples and events are numbered from the program's start, so the replay
-/// is the one [`crate::sim::simulate`] makes of the finished program, read piece by piece
-/// (`replay_carrying`, as the viewer reads a program). `None` where the pieces are not the
-/// beginning of the finished program, or the model cannot be built: the program is then
-/// proven after its planning.
+/// The proof of a program made while it is planned: one replay on the raster model of `job`
+/// (`RasterSim::replay_segments`) of the moves of each piece the linker sends as it plans
+/// ([`crate::plan::linker::stream_next_program`]), then of the program's tail once it is
+/// planned. Each piece is rounded to the post's step as the whole program is, so the replay is
+/// the one [`crate::sim::simulate`] makes of the finished program. `None` where the pieces are
+/// not the beginning of the finished program, or the model cannot be built: the program is
+/// then proven after its planning.
 fn prove_alongside(
     job: &Job,
     regions: &crate::model::Regions,
