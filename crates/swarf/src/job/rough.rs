@@ -125,9 +125,10 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
             crate::plan::linker::stream_next_program(None);
         }
     }
+    let count = ProofCount::default();
     std::thread::scope(|s| {
         let (tx, rx) = std::sync::mpsc::channel();
-        let proof = s.spawn(|| prove_alongside(job, &proof_regions, &opts.sim, rx));
+        let proof = s.spawn(|| prove_alongside(job, &proof_regions, &opts.sim, rx, &count));
         let unstream = Unstream;
         crate::plan::linker::stream_next_program(Some(tx.clone()));
         let planned = plan_on(job, opts, regions, &geom);
@@ -142,8 +143,16 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
         // (a proof that stopped early is made again after the planning)
         let _ = tx.send(crate::plan::linker::Streamed::End(planned.toolpath.clone()));
         drop(tx);
-        rough_planned_with(job, opts, planned, t0, progress, Some(proof))
+        rough_planned_with(job, opts, planned, t0, progress, Some(Alongside { proof, count: &count }))
     })
+}
+
+/// How far the proof alongside the planning has gone: the moves it has replayed, and the
+/// program's (0 until it is planned).
+#[derive(Debug, Default)]
+struct ProofCount {
+    replayed: std::sync::atomic::AtomicUsize,
+    total: std::sync::atomic::AtomicUsize,
 }
 
 fn nothing_to_cut() -> Error {
@@ -162,9 +171,11 @@ fn prove_alongside(
     regions: &crate::model::Regions,
     sim: &SimOptions,
     rx: std::sync::mpsc::Receiver<crate::plan::linker::Streamed>,
+    count: &ProofCount,
 ) -> Option<(Replay, crate::sim::Rest)> {
     use crate::plan::linker::Streamed;
     use crate::toolpath::Move;
+    use std::sync::atomic::Ordering::Relaxed;
     let mut model = match crate::sim::RasterSim::new(job, regions, sim) {
         Ok(m) => m,
         Err(e) => {
@@ -187,6 +198,7 @@ fn prove_alongside(
     let moves = std::iter::from_fn(|| {
         loop {
             if let Some(s) = ready.pop_front() {
+                count.replayed.fetch_add(1, Relaxed);
                 return Some(s);
             }
             if ended {
@@ -206,6 +218,7 @@ fn prove_alongside(
                         return None;
                     }
                     log::debug!("{n} of {} moves proven alongside the planning", tp.moves.len());
+                    count.total.store(tp.moves.len(), Relaxed);
                     ready.extend(rounded(sent.last().map_or(tp.start, |m| m.to), &tp.moves[n..]));
                     whole = true;
                 }
@@ -238,8 +251,41 @@ pub fn rough_planned(
     rough_planned_with(job, opts, planned, started, progress, None)
 }
 
-/// The proof of a program made alongside its planning ([`prove_alongside`]).
-type Alongside<'s> = std::thread::ScopedJoinHandle<'s, Option<(Replay, crate::sim::Rest)>>;
+/// The proof of a program made alongside its planning ([`prove_alongside`]) and how far it has
+/// gone.
+struct Alongside<'s> {
+    proof: std::thread::ScopedJoinHandle<'s, Option<(Replay, crate::sim::Rest)>>,
+    count: &'s ProofCount,
+}
+
+impl Alongside<'_> {
+    /// Waits for the proof, telling `progress` the share of the program's moves it has
+    /// replayed (from where it stood when the planning ended, each percent once).
+    fn wait(self, progress: &mut dyn FnMut(Stage, f64)) -> Option<(Replay, crate::sim::Rest)> {
+        use std::sync::atomic::Ordering::Relaxed;
+        let share = || {
+            let total = self.count.total.load(Relaxed);
+            if total == 0 { 0.0 } else { (self.count.replayed.load(Relaxed) as f64 / total as f64).min(1.0) }
+        };
+        progress(Stage::Simulate, 0.0);
+        let mut told = share();
+        progress(Stage::Simulate, told);
+        while !self.proof.is_finished() {
+            std::thread::sleep(std::time::Duration::from_millis(2));
+            let now = share();
+            if now >= told + 0.01 {
+                told = now;
+                progress(Stage::Simulate, now);
+            }
+        }
+        let made = self.proof.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+        // (else the program is proven again, with a progress of its own)
+        if made.is_some() {
+            progress(Stage::Simulate, 1.0);
+        }
+        made
+    }
+}
 
 /// [`rough_planned`], with the proof made alongside the planning when there is one: its
 /// proving time is then the wait for it after the planning.
@@ -262,13 +308,10 @@ fn rough_planned_with(
     let mut done = finish(toolpath, zs, &about, opts, compute_s, progress, |tp, progress| match proof {
         // (the strategy simulated this very program with these settings while planning it)
         Some(p) => Ok(p),
-        None => {
-            let made = alongside.map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)));
-            match made.flatten() {
-                Some(p) => Ok(p),
-                None => crate::sim::simulate(job, &regions, &opts.sim, tp, &mut |f| progress(Stage::Simulate, f)),
-            }
-        }
+        None => match alongside.and_then(|a| a.wait(progress)) {
+            Some(p) => Ok(p),
+            None => crate::sim::simulate(job, &regions, &opts.sim, tp, &mut |f| progress(Stage::Simulate, f)),
+        },
     })?;
     done.report.simulate_s += proof_s;
     done.report.total_s += proof_s;
@@ -492,7 +535,7 @@ mod tests {
             }
             tx.send(Streamed::End(tp.clone())).expect("the proof listens");
             drop(tx);
-            prove_alongside(&job, &planned.regions, &opts.sim, rx)
+            prove_alongside(&job, &planned.regions, &opts.sim, rx, &ProofCount::default())
         };
         let (along, rest) = fed(0.0).expect("the pieces are the program's beginning");
         let mut q = tp.clone();

@@ -3,7 +3,7 @@
 //! threads it runs on.
 
 use std::path::Path;
-use swarf::job::rough::{RoughOptions, RoughResult, rough};
+use swarf::job::rough::{RoughOptions, RoughResult, Stage, rough};
 use swarf::model::Job;
 use swarf::report::Report;
 use swarf::strategy::Strategy;
@@ -86,7 +86,11 @@ fn the_proof_alongside_the_planning_is_the_proof_after_it() {
             ..Default::default()
         };
         let what = format!("{case}, {kind}");
-        let along = rough(&job, &opts, &mut |_, _| {}).unwrap_or_else(|e| panic!("{what}: {e}"));
+        let mut told = Vec::new();
+        let along = rough(&job, &opts, &mut |stage, f| told.push((stage, f))).unwrap_or_else(|e| panic!("{what}: {e}"));
+        // the wait for the proof is its stage: from 0 to 1, never back
+        let proving: Vec<f64> = told.iter().filter(|(s, _)| *s == Stage::Simulate).map(|(_, f)| *f).collect();
+        assert!(proving.len() >= 3 && proving.is_sorted() && proving[proving.len() - 1] == 1.0, "{what}: {proving:?}");
         let planned =
             swarf::job::rough::plan(&job, &opts).unwrap_or_else(|e| panic!("{what}: {e}")).expect("a program");
         let after = swarf::job::rough::rough_planned(&job, &opts, planned, std::time::Instant::now(), &mut |_, _| {})
