@@ -76,7 +76,8 @@ pub struct RoughResult {
 pub enum Stage {
     /// Computing the toolpath.
     Plan,
-    /// Simulating it.
+    /// Simulating it (where [`rough`] proves the program alongside its planning, the wait for
+    /// the proof after the planning, from the share it had replayed by then).
     Simulate,
 }
 
