@@ -122,6 +122,12 @@ struct Stream {
     started: bool,
 }
 
+/// Is `m` part of the travel at the start height `start_z` before a program's first move
+/// down ([`Linker::finish`] drops it)?
+fn leading_travel(m: &crate::toolpath::Move, start_z: f64) -> bool {
+    m.is_rapid() && (m.to.z - start_z).abs() < 1e-9
+}
+
 thread_local! {
     static NEXT_STREAM: std::cell::RefCell<Option<std::sync::mpsc::Sender<Streamed>>> =
         const { std::cell::RefCell::new(None) };
@@ -223,7 +229,7 @@ impl<'a, M: Material> Linker<'a, M> {
         // above where it really does (the travel at the safe height before the first move down
         // is dropped: the post's opening rapid goes there directly)
         let start_z = self.tp.start.z;
-        let k = self.tp.moves.iter().take_while(|m| m.is_rapid() && (m.to.z - start_z).abs() < 1e-9).count();
+        let k = self.tp.moves.iter().take_while(|m| leading_travel(m, start_z)).count();
         if k > 0 && k < self.tp.moves.len() {
             self.tp.start = self.tp.moves[k - 1].to;
             self.tp.moves.drain(..k);
@@ -288,9 +294,7 @@ impl<'a, M: Material> Linker<'a, M> {
         let Some(st) = &mut self.stream else { return };
         if !st.started {
             let z0 = self.tp.start.z;
-            let Some(k) = self.tp.moves.iter().position(|m| !(m.is_rapid() && (m.to.z - z0).abs() < 1e-9)) else {
-                return;
-            };
+            let Some(k) = self.tp.moves.iter().position(|m| !leading_travel(m, z0)) else { return };
             (st.sent, st.started) = (k, true);
         }
         let n = self.tp.moves.len();

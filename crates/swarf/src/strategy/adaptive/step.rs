@@ -131,9 +131,12 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         let toward = if self.c.climb { -1.0 } else { 1.0 };
         let lim = FRAC_PI_2;
         let eval = |me: &Self, a: f64| {
-            let u = DVec2::new(a.cos(), a.sin());
-            let e = me.l.sim.front_engagement(c + u * step, me.z, u);
-            if along { e.max(me.along_engagement(c, a, step)) } else { e }
+            if along {
+                me.step_engagement(c, a, step)
+            } else {
+                let u = DVec2::new(a.cos(), a.sin());
+                me.l.sim.front_engagement(c + u * step, me.z, u)
+            }
         };
         let e0 = eval(self, guess);
         let mut alpha = guess;
@@ -190,6 +193,13 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         Some(alpha)
     }
 
+    /// The engagement of a step of `step` from `c` along heading `a`: the larger of its end's
+    /// and [`Self::along_engagement`].
+    fn step_engagement(&self, c: DVec2, a: f64, step: f64) -> f64 {
+        let u = DVec2::new(a.cos(), a.sin());
+        self.l.sim.front_engagement(c + u * step, self.z, u).max(self.along_engagement(c, a, step))
+    }
+
     /// The larger engagement at a third and at two thirds of a step of `step` from `c` along
     /// heading `a`, against the stock as it is. A step that turns toward the material (at a
     /// pass's end, round a thin remnant) can cross a sliver of stock that reads far above the
@@ -229,7 +239,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
             if !self.allowed(n) || !self.step_allowed(c, n) {
                 continue;
             }
-            let e = self.l.sim.front_engagement(n, self.z, u).max(self.along_engagement(c, a, self.c.step));
+            let e = self.step_engagement(c, a, self.c.step);
             if e <= self.c.theta + STEP_SLACK_DEG && e > AIR_DEG {
                 return Some((n, a));
             }
