@@ -246,7 +246,8 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         let (ci, cj) = (block(cur.x, g.x0, i0, i1), block(cur.y, g.y0, j0, j1));
         // (failures of this call's tries do not change its candidates)
         let failed0 = self.failed.len();
-        let mut tried = 0usize;
+        // (the candidates tried, and those passed over: tried or near a failed start)
+        let (mut tried, mut passed) = (0usize, 0usize);
         let mut w = LATERAL_WINDOW;
         loop {
             let (wi0, wi1) = (ci.saturating_sub(w).max(i0), (ci + w).min(i1));
@@ -289,14 +290,6 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
                     }
                     (dk, p) = best;
                 }
-                // (the box test first: no square root for the failures far away)
-                let near_fail = |f: &DVec2| {
-                    let v = *f - p;
-                    v.x.abs() < 1.5 * cell && v.y.abs() < 1.5 * cell && v.length() < 1.5 * cell
-                };
-                if self.failed[..failed0].iter().any(near_fail) {
-                    continue;
-                }
                 // not tangent to the part (§4.5): starts that are within a tool diameter of the
                 // walls come after all the others, which clear toward the walls first
                 let near_wall = dk < 3.0 * self.c.r + self.c.margin;
@@ -306,8 +299,20 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
                 }
             }
             cands.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let skip = tried.min(cands.len());
+            let skip = passed.min(cands.len());
             for (_, p) in cands.into_iter().skip(skip) {
+                passed += 1;
+                // not near a start that failed before this search (asked only of the candidates
+                // the search comes to: of every candidate in the window, it was a tenth of
+                // stl_wheel_in_box's planning)
+                let near_fail = |f: &DVec2| {
+                    let v = *f - p;
+                    // (the box test first: no square root for the failures far away)
+                    v.x.abs() < 1.5 * cell && v.y.abs() < 1.5 * cell && v.length() < 1.5 * cell
+                };
+                if self.failed[..failed0].iter().any(near_fail) {
+                    continue;
+                }
                 if tried >= tries {
                     return None;
                 }
