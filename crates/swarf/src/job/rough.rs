@@ -118,20 +118,11 @@ pub fn rough(job: &Job, opts: &RoughOptions, progress: &mut dyn FnMut(Stage, f64
     }
     let (regions, geom) = geometry(job, opts)?;
     let proof_regions = regions.clone();
-    /// Takes back the sender no linker took, also when the planning panics (the proof waits
-    /// for every sender to go).
-    struct Unstream;
-    impl Drop for Unstream {
-        fn drop(&mut self) {
-            crate::plan::linker::stream_next_program(None);
-        }
-    }
     let count = ProofCount::default();
     std::thread::scope(|s| {
         let (tx, rx) = std::sync::mpsc::channel();
         let proof = s.spawn(|| prove_alongside(job, &proof_regions, &opts.sim, rx, &count));
-        let unstream = Unstream;
-        crate::plan::linker::stream_next_program(Some(tx.clone()));
+        let unstream = crate::plan::linker::stream_next_program(Some(tx.clone()));
         let planned = plan_on(job, opts, regions, &geom);
         drop(unstream);
         let planned = match planned {

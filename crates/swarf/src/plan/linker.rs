@@ -137,8 +137,20 @@ thread_local! {
 /// ([`Streamed::Piece`]); `None` takes back a sender no linker took. A job's program is made
 /// by one linker (`plan::levels::drive`), so the proof can replay the program while it is
 /// planned.
-pub(crate) fn stream_next_program(tx: Option<std::sync::mpsc::Sender<Streamed>>) {
+pub(crate) fn stream_next_program(tx: Option<std::sync::mpsc::Sender<Streamed>>) -> Unstream {
     NEXT_STREAM.with(|s| *s.borrow_mut() = tx);
+    Unstream
+}
+
+/// Takes back the sender [`stream_next_program`] left that no linker took when it is dropped,
+/// also when the planning panics (a receiver waits for every sender to go).
+#[must_use = "the sender is taken back when this is dropped"]
+pub(crate) struct Unstream;
+
+impl Drop for Unstream {
+    fn drop(&mut self) {
+        NEXT_STREAM.with(|s| *s.borrow_mut() = None);
+    }
 }
 
 impl<'a> Linker<'a> {
@@ -1091,7 +1103,7 @@ mod tests {
         let p = Pocket::new(20.0, 10.0);
         let z = p.z();
         let (tx, rx) = std::sync::mpsc::channel();
-        stream_next_program(Some(tx));
+        let _unstream = stream_next_program(Some(tx));
         let mut l = p.linker(DVec2::new(2.0, 2.0));
         let quiet = p.linker(DVec2::new(2.0, 2.0));
         l.precut = true;
