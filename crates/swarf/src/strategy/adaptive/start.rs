@@ -205,17 +205,20 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
             !(d < self.c.r + 0.5 * cell || d > self.c.r + 2.5 * cell)
         };
         if let Some((oi0, oi1, oj0, oj1)) = redone {
-            let inside = |n: usize| (oi0..=oi1).contains(&(n % cx)) && (oj0..=oj1).contains(&(n / cx));
-            let mut kept: Vec<u32> = std::mem::take(&mut self.coarse_band);
-            kept.retain(|&n| !inside(n as usize));
+            // (merged in row order: the blocks before the window's on each of its rows, the
+            // window's read again, the blocks after; a sort of the whole band was a tenth of
+            // the search)
+            let mut old = std::mem::take(&mut self.coarse_band).into_iter().peekable();
+            let mut kept: Vec<u32> = Vec::with_capacity(old.len());
             for j in oj0..=oj1 {
-                for i in oi0..=oi1 {
-                    if band(self.coarse_dist[j * cx + i]) {
-                        kept.push((j * cx + i) as u32);
-                    }
+                let row = j * cx;
+                while let Some(n) = old.next_if(|&n| (n as usize) < row + oi0) {
+                    kept.push(n);
                 }
+                while old.next_if(|&n| (n as usize) <= row + oi1).is_some() {}
+                kept.extend((oi0..=oi1).filter(|&i| band(self.coarse_dist[row + i])).map(|i| (row + i) as u32));
             }
-            kept.sort_unstable();
+            kept.extend(old);
             self.coarse_band = kept;
         }
         let any = mat.iter().any(|m| *m);
