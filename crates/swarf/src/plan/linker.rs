@@ -99,6 +99,10 @@ pub(crate) struct Linker<'a, M = RasterSim> {
     stream: Option<Stream>,
 }
 
+/// How far above a floor the program cut itself an entry starts at most, mm (see
+/// [`Linker::start_over`]).
+pub const MACHINED_APPROACH: f64 = 0.25;
+
 /// What a proof alongside the planning receives ([`stream_next_program`]).
 #[derive(Debug)]
 pub(crate) enum Streamed {
@@ -205,7 +209,7 @@ impl<'a, M: Material> Linker<'a, M> {
     /// `why`: the last resort of an entry. The bore is kept for later entries (see
     /// [`Linker::down_a_bore`]).
     pub(crate) fn plunge(&mut self, c: DVec2, top: f64, z: f64, why: &str) {
-        self.travel(c, top + self.link.approach);
+        self.travel(c, self.start_over(top));
         self.tp.note(format!("plunge: {why}"));
         self.push_line(MoveKind::Plunge, c.extend(z), self.entry_feed);
         self.bores.push((c, z));
@@ -570,12 +574,10 @@ impl<'a, M: Material> Linker<'a, M> {
     /// Gets the tool down to `z` at `start`, entering material as gently as possible.
     pub(crate) fn enter(&mut self, start: DVec2, pts: &[DVec2], z: f64, eps: f64) {
         let r = self.r;
-        let approach = self.link.approach;
         let top = self.top_near(start, r + LANDING_MARGIN);
         if top <= z + eps {
             // free or cleared space: rapid close, feed the last bit
-            let h = (z + approach).max(if top.is_finite() { top + approach } else { z + approach });
-            self.travel(start, h);
+            self.travel(start, self.start_over(top.max(z)));
             self.push_line(MoveKind::Descend, start.extend(z), self.feed);
             return;
         }
@@ -593,7 +595,7 @@ impl<'a, M: Material> Linker<'a, M> {
         let rh = self.helix_room(start);
         if rh >= self.link.helix_min_frac * r {
             let top_h = self.top_near(start, r + rh + 0.05).max(z);
-            self.helix(start, rh, top_h + approach, z, pts);
+            self.helix(start, rh, self.start_over(top_h), z, pts);
             return;
         }
         // ramp along the start of the pass
@@ -607,7 +609,7 @@ impl<'a, M: Material> Linker<'a, M> {
                     .max(self.sim.max_height_near(&Path::Line { a: w[0].extend(0.0), b: w[1].extend(0.0) }, r + 0.05)
                         as f64);
             }
-            self.ramp(&prefix, top_r + approach, z);
+            self.ramp(&prefix, self.start_over(top_r), z);
             return;
         }
         // a helix round a centre nearby that ends by the start (a pass that starts on the wall
@@ -616,16 +618,16 @@ impl<'a, M: Material> Linker<'a, M> {
             let top_h = self.top_near(c, r + rh + 0.05).max(z);
             let on = start - c;
             // (started so that it ends on the way from the centre to the start)
-            let turn = self.helix_turn(rh, top_h + approach, z);
+            let turn = self.helix_turn(rh, self.start_over(top_h), z);
             let a0 = on.y.atan2(on.x) - if self.link.climb { turn } else { -turn };
-            self.helix_down(c, rh, top_h + approach, z, a0);
+            self.helix_down(c, rh, self.start_over(top_h), z, a0);
             self.push_line(MoveKind::Cut, start.extend(z), self.feed);
             return;
         }
         // down a bore this program already plunged at this level, then sideways (a clean-up
         // contour round a bore barely wider than the tool, after the pass that plunged it)
         if let Some(c) = self.bore_to(start, z) {
-            self.travel(c, self.top_near(c, r + LANDING_MARGIN).max(z) + approach);
+            self.travel(c, self.start_over(self.top_near(c, r + LANDING_MARGIN).max(z)));
             self.tp.note("entry down a bore plunged before");
             self.push_line(MoveKind::Descend, c.extend(z), self.feed);
             self.push_line(MoveKind::Cut, start.extend(z), self.feed);
@@ -718,12 +720,24 @@ impl<'a, M: Material> Linker<'a, M> {
         best.map(|b| b.1)
     }
 
+    /// The height an entry or a descent onto material whose top is `top` starts from: the
+    /// approach above it, where the top may be the stock's own (whose height is the user's
+    /// word), and at most [`MACHINED_APPROACH`] above it where it lies under the stock's top: a
+    /// floor this program cut at a level above, or free space (a helix or ramp 1 mm over a
+    /// floor cut 1 mm higher ran half its length in the air).
+    pub(crate) fn start_over(&self, top: f64) -> f64 {
+        let a = if top < self.job.stock_top - 1e-6 {
+            self.link.approach.min(MACHINED_APPROACH)
+        } else {
+            self.link.approach
+        };
+        top + a
+    }
+
     /// Lands at `p` and cuts sideways to `start`.
     pub(crate) fn land_and_approach(&mut self, p: DVec2, start: DVec2, z: f64) {
-        let approach = self.link.approach;
         let top = self.top_near(p, self.r + LANDING_MARGIN);
-        let h = (z + approach).max(if top.is_finite() { top + approach } else { z + approach });
-        self.travel(p, h);
+        self.travel(p, self.start_over(top.max(z)));
         self.push_line(MoveKind::Descend, p.extend(z), self.feed);
         self.tp.note("lateral entry");
         self.push_line(MoveKind::Cut, start.extend(z), self.feed);
@@ -985,6 +999,35 @@ mod tests {
         assert_eq!(count(&l.tp.moves, MoveKind::Plunge) + count(&l.tp.moves, MoveKind::Descend), 0);
     }
 
+    /// A helix over the stock's own top starts the approach above it; over a floor the program
+    /// cut 1 mm under the top, at most `MACHINED_APPROACH` above that floor (the approach would
+    /// spend most of a 1 mm descent in the air).
+    #[test]
+    fn an_entry_over_a_floor_cut_before_starts_just_above_it() {
+        let p = Pocket::new(20.0, 10.0);
+        let z = p.z();
+        let start = DVec2::new(10.0, 5.0);
+        let pts = [start, DVec2::new(15.0, 5.0)];
+        let entry_top = |l: &Linker| {
+            let k = l.tp.moves.iter().position(|m| m.kind == MoveKind::Entry).expect("a helix");
+            assert!(k > 0 && l.tp.moves[k - 1].is_rapid(), "{:?}", &l.tp.moves[..=k]);
+            l.tp.moves[k - 1].to.z
+        };
+        let mut raw = p.linker(start);
+        raw.enter(start, &pts, z, 0.01);
+        assert!((entry_top(&raw) - (p.job.stock_top + p.link.approach)).abs() < 1e-9);
+        let mut cut = p.linker(start);
+        let floor = p.job.stock_top - 1.0;
+        for k in 0..=12 {
+            clear_row(&mut cut, floor, 1.0 + 0.7 * k as f64, 1.0, 19.0);
+        }
+        assert!(cut.top_near(start, 6.0) <= floor as f32 as f64 + 1e-6, "the floor is cut round the start");
+        cut.enter(start, &pts, z, 0.01);
+        assert!(noted(&cut, "helix entry"), "{:?}", cut.tp.notes);
+        assert!((entry_top(&cut) - (floor + MACHINED_APPROACH)).abs() < 1e-6, "{}", entry_top(&cut));
+        assert!(entry_top(&cut) < floor + p.link.approach - 0.5, "not the whole approach over the cut floor");
+    }
+
     /// A slot 4.3 mm wide for the Ø4 mm tool: 0.15 mm on either side, less than the smallest
     /// helix (0.1 R) needs. The tool ramps down along the start of the pass (straight lines
     /// back and forth along it at the ramp angle), then is at the start at depth.
@@ -1230,8 +1273,9 @@ mod tests {
 
     /// The pocket cleared but for a wall of material across it (8 < x < 12): from one side to
     /// the other the tool cannot stay down. It lifts just over the material — the approach
-    /// height above the stock top, not the safe height — crosses, comes down by rapids to the
-    /// approach height above the level and descends at the feed.
+    /// height above the stock top, not the safe height — crosses, comes down by rapids to
+    /// `MACHINED_APPROACH` above the level (cleared space under the stock's top) and descends
+    /// at the feed.
     #[test]
     fn material_in_the_way_lifts_the_tool_no_higher_than_it_must() {
         let p = Pocket::new(20.0, 10.0);
@@ -1260,7 +1304,7 @@ mod tests {
         assert_eq!(top, p.job.top() + l.link.approach);
         assert!(top < l.safe_z);
         assert!(moves[..k].iter().all(|m| m.is_rapid()), "{:?}", &moves[..k]);
-        assert_eq!(moves[k - 1].to, b.extend(z + l.link.approach));
+        assert_eq!(moves[k - 1].to, b.extend(z + MACHINED_APPROACH));
         assert_eq!((moves[k].to, moves[k].feed), (b.extend(z), l.feed));
     }
 
