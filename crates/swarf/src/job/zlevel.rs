@@ -223,9 +223,9 @@ fn cut_alongside(
     cut
 }
 
-/// Leaves in `state` the material of `before` cut by `program` (none: not cut), `state` made
-/// from `job` with `sim`: what
-/// [`cut_alongside`] cut where that is it, else the model made again from `before`.
+/// Leaves in `state` (a model of `job` made with `sim`) the material of `before` cut by
+/// `program` (none: not cut): what [`cut_alongside`] cut where that is it, else the model made
+/// again from `before` and cut by the program.
 fn restore(
     state: &mut crate::sim::RasterSim,
     job: &MeshJob,
