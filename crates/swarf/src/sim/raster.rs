@@ -344,9 +344,16 @@ impl RasterSim {
             },
         );
         if let Some(hm) = &opts.heights {
+            // (on a grid with the heights' origin and cell, as a z-level's models are, a cell
+            // is the heights' cell of the same indices: no lookup of each centre, which was a
+            // third of building a level's model)
+            let h = hm.grid;
+            let aligned = h.x0 == grid.x0 && h.y0 == grid.y0 && h.res == grid.res;
             s0.par_chunks_mut(grid.nx).zip(p.par_chunks_mut(grid.nx)).enumerate().for_each(|(j, (s0, p))| {
                 for i in 0..grid.nx {
-                    if let Some(k) = hm.cell(grid.center(i, j)) {
+                    let cell =
+                        if aligned { (i < h.nx && j < h.ny).then(|| j * h.nx + i) } else { hm.cell(grid.center(i, j)) };
+                    if let Some(k) = cell {
                         s0[i] = s0[i].min(hm.stock[k]);
                         if let Some(hp) = &hm.part {
                             p[i] = p[i].max(hp[k]);
