@@ -176,9 +176,8 @@ fn prove_alongside(
         }
     };
     // the moves as they come, each piece rounded as the whole program is (each move's ends
-    // and arc centre from the rounded end before it); `sent` the moves as planned
-    let mut sent: Vec<Move> = Vec::new();
-    let mut first: Option<crate::geom::DVec3> = None;
+    // and arc centre from the rounded end before it); `received` the moves as planned
+    let mut received = crate::plan::linker::Received::default();
     let mut ready: std::collections::VecDeque<(crate::geom::DVec3, Move)> = Default::default();
     let (mut ended, mut whole) = (false, false);
     let rounded = |start, moves: &[Move]| {
@@ -198,20 +197,18 @@ fn prove_alongside(
             }
             match rx.recv() {
                 Ok(Streamed::Piece { start, moves }) => {
-                    first.get_or_insert(start);
                     ready.extend(rounded(start, &moves));
-                    sent.extend(moves);
+                    received.piece(start, moves);
                 }
                 Ok(Streamed::End(tp)) => {
                     ended = true;
-                    let n = sent.len();
-                    if first.is_some_and(|f| f != tp.start) || tp.moves.len() < n || tp.moves[..n] != sent[..] {
+                    let Some((at, tail)) = received.tail(&tp) else {
                         log::debug!("the moves proven alongside the planning are not the program's beginning");
                         return None;
-                    }
-                    log::debug!("{n} of {} moves proven alongside the planning", tp.moves.len());
+                    };
+                    log::debug!("{} of {} moves proven alongside the planning", received.len(), tp.moves.len());
                     count.total.store(tp.moves.len(), Relaxed);
-                    ready.extend(rounded(sent.last().map_or(tp.start, |m| m.to), &tp.moves[n..]));
+                    ready.extend(rounded(at, tail));
                     whole = true;
                 }
                 // (the planning failed)
@@ -499,7 +496,7 @@ pub(crate) fn plan_on(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::plan::linker::Streamed;
+    use crate::plan::linker::send_in_pieces;
 
     /// The proof alongside the planning, fed a planned program in pieces of 300 moves (from
     /// the program's start, as the linker sends them) and then the whole program: the replay
@@ -515,18 +512,7 @@ mod tests {
         let tp = &planned.toolpath;
         assert!(tp.moves.len() > 1000, "{} moves", tp.moves.len());
         let fed = |off: f64| {
-            let (tx, rx) = std::sync::mpsc::channel();
-            let mut at = tp.start;
-            for (k, chunk) in tp.moves[..tp.moves.len() - 10].chunks(300).enumerate() {
-                let mut moves = chunk.to_vec();
-                if k == 1 {
-                    moves[7].to.x += off;
-                }
-                tx.send(Streamed::Piece { start: at, moves }).expect("the proof listens");
-                at = chunk[chunk.len() - 1].to;
-            }
-            tx.send(Streamed::End(tp.clone())).expect("the proof listens");
-            drop(tx);
+            let rx = send_in_pieces(tp, off);
             prove_alongside(&job, &planned.regions, &opts.sim, rx, &ProofCount::default())
         };
         let (along, rest) = fed(0.0).expect("the pieces are the program's beginning");

@@ -195,32 +195,25 @@ fn cut_alongside(
     rx: std::sync::mpsc::Receiver<crate::plan::linker::Streamed>,
 ) -> Cut {
     use crate::plan::linker::Streamed;
-    let mut sent: Vec<crate::toolpath::Move> = Vec::new();
-    let mut first = None;
-    let mut cut = Cut { moves: 0, whole: false };
+    let mut received = crate::plan::linker::Received::default();
     for s in rx {
         match s {
             Streamed::Piece { start, moves } => {
-                first.get_or_insert(start);
                 state.cut_moves(start, &moves);
-                cut.moves += moves.len();
-                sent.extend(moves);
+                received.piece(start, moves);
             }
             Streamed::End(tp) => {
-                let n = sent.len();
-                if first.is_some_and(|f| f != tp.start) || tp.moves.len() < n || tp.moves[..n] != sent[..] {
+                let Some((at, tail)) = received.tail(&tp) else {
                     log::debug!("the moves cut alongside the planning are not the level's beginning");
-                    return cut;
-                }
-                state.cut_moves(sent.last().map_or(tp.start, |m| m.to), &tp.moves[n..]);
-                cut.moves = tp.moves.len();
-                cut.whole = true;
-                log::trace!("{n} of {} moves cut alongside the planning", tp.moves.len());
-                return cut;
+                    break;
+                };
+                log::trace!("{} of {} moves cut alongside the planning", received.len(), tp.moves.len());
+                state.cut_moves(at, tail);
+                return Cut { moves: tp.moves.len(), whole: true };
             }
         }
     }
-    cut
+    Cut { moves: received.len(), whole: false }
 }
 
 /// Leaves in `state` (a model of `job` made with `sim`) the material of `before` cut by
@@ -301,7 +294,7 @@ pub fn rough(job: &MeshJob, opts: &RoughOptions, progress: &mut dyn FnMut(Stage,
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::plan::linker::Streamed;
+    use crate::plan::linker::send_in_pieces;
     use crate::{Input, Overrides, load_input};
 
     /// A program cut into the material piece by piece as it is planned, then its tail: the
@@ -324,20 +317,8 @@ mod tests {
         let mut after = fresh();
         after.cut_moves(tp.start, &tp.moves);
         let fed = |off: f64| {
-            let (tx, rx) = std::sync::mpsc::channel();
-            let mut at = tp.start;
-            for (k, chunk) in tp.moves[..tp.moves.len() - 10].chunks(300).enumerate() {
-                let mut moves = chunk.to_vec();
-                if k == 1 {
-                    moves[7].to.x += off;
-                }
-                tx.send(Streamed::Piece { start: at, moves }).expect("the cut listens");
-                at = chunk[chunk.len() - 1].to;
-            }
-            tx.send(Streamed::End(tp.clone())).expect("the cut listens");
-            drop(tx);
             let mut m = fresh();
-            let cut = cut_alongside(&mut m, rx);
+            let cut = cut_alongside(&mut m, send_in_pieces(&tp, off));
             (m, cut)
         };
         let (m, cut) = fed(0.0);

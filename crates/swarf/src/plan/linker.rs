@@ -114,6 +114,57 @@ pub(crate) enum Streamed {
     End(Toolpath),
 }
 
+/// What a receiver of a stream ([`stream_next_program`]) has been sent so far: the pieces'
+/// moves, and where the first began. The finished program ([`Streamed::End`]) holds them as
+/// its beginning, or the pieces were of another program.
+#[derive(Debug, Default)]
+pub(crate) struct Received {
+    first: Option<DVec3>,
+    sent: Vec<crate::toolpath::Move>,
+}
+
+impl Received {
+    /// Notes a piece ([`Streamed::Piece`]).
+    pub(crate) fn piece(&mut self, start: DVec3, moves: Vec<crate::toolpath::Move>) {
+        self.first.get_or_insert(start);
+        self.sent.extend(moves);
+    }
+
+    /// Moves received.
+    pub(crate) fn len(&self) -> usize {
+        self.sent.len()
+    }
+
+    /// The moves of the finished program `tp` after those received, and where they start, when
+    /// the pieces received are its beginning.
+    pub(crate) fn tail<'t>(&self, tp: &'t Toolpath) -> Option<(DVec3, &'t [crate::toolpath::Move])> {
+        let n = self.sent.len();
+        if self.first.is_some_and(|f| f != tp.start) || tp.moves.len() < n || tp.moves[..n] != self.sent[..] {
+            return None;
+        }
+        Some((self.sent.last().map_or(tp.start, |m| m.to), &tp.moves[n..]))
+    }
+}
+
+/// A finished program `tp` sent as a linker would, for the tests of its receivers: in pieces
+/// of 300 moves from its start (all but its last 10 moves), the 8th move of the second piece
+/// moved `off` mm along x, then the whole program.
+#[cfg(test)]
+pub(crate) fn send_in_pieces(tp: &Toolpath, off: f64) -> std::sync::mpsc::Receiver<Streamed> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let mut at = tp.start;
+    for (k, chunk) in tp.moves[..tp.moves.len() - 10].chunks(300).enumerate() {
+        let mut moves = chunk.to_vec();
+        if k == 1 {
+            moves[7].to.x += off;
+        }
+        tx.send(Streamed::Piece { start: at, moves }).expect("the receiver listens");
+        at = chunk[chunk.len() - 1].to;
+    }
+    tx.send(Streamed::End(tp.clone())).expect("the receiver listens");
+    rx
+}
+
 /// Moves a stream sends at a time.
 const STREAM_PIECE: usize = 512;
 
