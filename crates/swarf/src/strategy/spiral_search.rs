@@ -101,15 +101,19 @@ pub(crate) fn plan_spiral(cx: &Context, opts: &SpiralOptions) -> Result<Program>
 /// gouge) and the engagement bound (p99 outside the entry ≤ the reference + 10°), as swarf's
 /// simulator (`cx.sim`) judges them (`cx.finish` is not used).
 ///
-/// The candidates of [`candidates`] are planned [`ROUND`] at a time, in their order (the
-/// highest floor first: a lower floor holds the engagement better in tight turns and is
-/// slower, so the fastest feasible one is as a rule among the first), and each one's time is
-/// read off its program. Simulation (the slow part) is spent only where it can change the
-/// answer: after each round, the candidates planned and not yet simulated are simulated in
-/// order of time, fastest first, and the first feasible one is kept; the next round is
-/// planned only when none was. A damping (floor) that broke the engagement bound from one
-/// start is not simulated from the others (the engagement depends on the damping far more than
-/// on the start), nor is a higher floor from the same start.
+/// The candidates of [`candidates`] are planned [`ROUND`] at a time (the one the search asks for
+/// and the floor of the same spiral next to it), and each one's time is read off its program.
+/// Simulation (the slow part) is spent only where it can change the answer
+/// ([`next_candidate`]): the highest floor of the first spiral first (a lower floor holds the
+/// engagement better in tight turns and is slower, so the fastest feasible one is as a rule a
+/// high one), then the next; once two floors have broken the engagement bound, the floor where
+/// the line through their p99 readings meets the bound (the p99 falls about linearly with the
+/// floor: on narrow_slot and simple_part, where every floor breaks it, the lowest floor is
+/// simulated third and rules out the three between, which were simulated one by one before).
+/// Once a candidate is feasible, only faster ones are simulated: the floors of its spiral above
+/// it that were not ruled out, then any planned faster. A damping (floor) that broke the
+/// engagement bound from one start is not simulated from the others (the engagement depends on
+/// the damping far more than on the start), nor is a higher floor from the same start.
 ///
 /// The search is bounded: it simulates at most [`MAX_SIMULATED`] candidates, and begins no
 /// further round once the cells its simulations swept reach [`SpiralOptions::search_cells`]
@@ -151,67 +155,64 @@ fn optimise_spiral_planned(
     let mut trials: Vec<Trial> = candidates.iter().map(|c| Trial { choice: *c, time_min: None, sim: None }).collect();
     let (d, res) = (job.cutting.tool.diameter, cx.sim.res_for(job.cutting.tool.diameter));
     let mut cells = vec![0.0; n];
-    let mut best = None;
+    // planned (or tried and not made), and the round of the work bound
+    let mut tried = vec![false; n];
+    let mut best: Option<usize> = None;
     let mut simulated = 0;
     let mut swept = 0.0;
-    let mut next = 0;
-    while best.is_none() && next < n && simulated < MAX_SIMULATED && swept < opts.search_cells {
-        let round = next..(next + ROUND).min(n);
-        let t0 = std::time::Instant::now();
-        let made: Vec<_> =
-            candidates[round.clone()].par_iter().map(|c| plan_spiral_trial(cx, &fields, opts, c)).collect();
-        log::debug!("spiral: candidates {round:?} planned in {:.2} s", t0.elapsed().as_secs_f64());
-        for (i, tp) in round.clone().zip(made) {
-            let totals = tp.as_ref().map(|(_, written)| written.totals(job.cutting.rapid_rate));
-            trials[i].time_min = totals.map(|t| t.time_min);
-            // the cells the tool sweeps along its cuts, what simulating it costs
-            cells[i] = totals.map_or(0.0, |t| t.cut_length_mm * d / (res * res));
-            planned[i] = tp;
+    let mut stopped = false;
+    while let Some(i) = next_candidate(&trials, &tried, best, bound) {
+        if simulated == MAX_SIMULATED {
+            stopped = best.is_none();
+            break;
         }
-        next = round.end;
-        let mut order: Vec<usize> =
-            (0..next).filter(|&i| trials[i].time_min.is_some() && trials[i].sim.is_none()).collect();
-        // (stable: equal times keep the candidates' order, so the result is deterministic)
-        order.sort_by(|&a, &b| {
-            trials[a].time_min.unwrap_or(f64::MAX).total_cmp(&trials[b].time_min.unwrap_or(f64::MAX))
-        });
-        for i in order {
-            if simulated == MAX_SIMULATED {
+        if !tried[i] {
+            // a new round: planned only within the work bound
+            if swept >= opts.search_cells {
+                stopped = best.is_none();
                 break;
             }
-            let c = trials[i].choice;
-            // a damping that broke the bound from any start, or a lower floor that did from
-            // this one (the gaps in tight turns only widen with the floor)
-            let broke = |t: &Trial| {
-                t.sim.is_some_and(|s| s.p99_deg > bound)
-                    && t.choice.zeta == c.zeta
-                    && (t.choice.floor == c.floor || (t.choice.start == c.start && t.choice.floor < c.floor))
-            };
-            if trials.iter().any(broke) {
-                continue;
-            }
-            let Some((_, tp)) = &planned[i] else { continue };
-            simulated += 1;
-            swept += cells[i];
+            let round = [Some(i), partner(&trials, &tried, i, bound)];
+            let round: Vec<usize> = round.into_iter().flatten().collect();
             let t0 = std::time::Instant::now();
-            let (sim, (rp, rest)) = judge_spiral(job, cx.regions, cx.sim, tp)?;
-            let secs = t0.elapsed().as_secs_f64();
-            log::debug!("spiral: candidate {i} simulated in {secs:.2} s");
-            trials[i].sim = Some(sim);
-            proofs[i] = Some((rp, rest, secs));
-            if sim.feasible {
-                best = Some(i);
-                break;
+            let made: Vec<_> =
+                round.par_iter().map(|&k| plan_spiral_trial(cx, &fields, opts, &candidates[k])).collect();
+            log::debug!("spiral: candidates {round:?} planned in {:.2} s", t0.elapsed().as_secs_f64());
+            for (&k, tp) in round.iter().zip(made) {
+                let totals = tp.as_ref().map(|(_, written)| written.totals(job.cutting.rapid_rate));
+                trials[k].time_min = totals.map(|t| t.time_min);
+                // the cells the tool sweeps along its cuts, what simulating it costs
+                cells[k] = totals.map_or(0.0, |t| t.cut_length_mm * d / (res * res));
+                planned[k] = tp;
+                tried[k] = true;
             }
+            // (planned now: asked again, it may be no longer worth simulating)
+            continue;
+        }
+        let Some((_, tp)) = &planned[i] else { continue };
+        simulated += 1;
+        swept += cells[i];
+        let t0 = std::time::Instant::now();
+        let (sim, (rp, rest)) = judge_spiral(job, cx.regions, cx.sim, tp)?;
+        let secs = t0.elapsed().as_secs_f64();
+        log::debug!(
+            "spiral: candidate {i} simulated in {secs:.2} s: p99 {:.1}, feasible {}",
+            sim.p99_deg,
+            sim.feasible
+        );
+        trials[i].sim = Some(sim);
+        proofs[i] = Some((rp, rest, secs));
+        if sim.feasible && best.is_none_or(|b| trials[i].time_min < trials[b].time_min) {
+            best = Some(i);
         }
     }
-    let stopped = best.is_none() && next < n;
     let best = best
         .or_else(|| nearest_miss(&trials, bound))
         .ok_or_else(|| Error::job("spiral strategy", "no spiral could be made from any start or ζ"))?;
     if stopped {
         log::info!(
-            "spiral search stopped after {next} of {n} candidates ({simulated} simulated, {:.0} M cells swept)",
+            "spiral search stopped after {} of {n} candidates ({simulated} simulated, {:.0} M cells swept)",
+            tried.iter().filter(|t| **t).count(),
             swept / 1e6
         );
     }
@@ -225,6 +226,99 @@ fn optimise_spiral_planned(
         planned.swap_remove(best).map(|(toolpath, _)| Program { toolpath, proof, proof_s }),
         stopped,
     ))
+}
+
+/// Did the simulated trial `t` break the engagement bound in a way that rules out `c` — the same
+/// damping from any start, or a lower floor from the same start (a lower floor holds the
+/// engagement better: the gaps in tight turns only widen with the floor)?
+fn rules_out(t: &Trial, c: &SpiralChoice, bound: f64) -> bool {
+    t.sim.is_some_and(|s| s.p99_deg > bound)
+        && t.choice.zeta == c.zeta
+        && (t.choice.floor == c.floor || (t.choice.start == c.start && t.choice.floor < c.floor))
+}
+
+/// The same spiral but for its floor: the same ζ and start.
+fn same_spiral(a: &SpiralChoice, b: &SpiralChoice) -> bool {
+    a.zeta == b.zeta && a.start == b.start
+}
+
+/// The candidate the search simulates next (planning it first where `tried` says it has not
+/// been), or `None` when the search is done.
+///
+/// Still open are the candidates not simulated, not tried and failed to plan, and not ruled out
+/// ([`rules_out`]). Before a feasible candidate is found: the first spiral (ζ and start, in the
+/// candidates' order) with open floors, at the floor where the line through its two lowest
+/// floors that broke the engagement bound reaches the bound (the highest open floor at or below
+/// it, else the lowest open floor) — p99 falls about linearly with the floor, so one step lands
+/// at or next to the fastest feasible floor, and where even the lowest floor breaks the bound
+/// every floor above it is ruled out at once; with fewer than two such floors, its highest open
+/// floor (the fastest). After one is found: the open floors of its spiral above it, lowest
+/// first, then any open candidate planned faster than it, fastest first — so no faster
+/// candidate is passed over unless it broke the bound or was ruled out.
+fn next_candidate(trials: &[Trial], tried: &[bool], best: Option<usize>, bound: f64) -> Option<usize> {
+    let n = trials.len();
+    let open = |i: usize| {
+        trials[i].sim.is_none()
+            && !(tried[i] && trials[i].time_min.is_none())
+            && !trials.iter().any(|t| rules_out(t, &trials[i].choice, bound))
+    };
+    let floor = |i: &usize| trials[*i].choice.floor;
+    if let Some(b) = best {
+        let (cb, tb) = (trials[b].choice, trials[b].time_min.unwrap_or(f64::INFINITY));
+        let faster = |i: usize| trials[i].time_min.is_none_or(|t| t < tb);
+        return (0..n)
+            .filter(|&i| {
+                open(i) && faster(i) && same_spiral(&trials[i].choice, &cb) && trials[i].choice.floor > cb.floor
+            })
+            .min_by(|a, b| floor(a).total_cmp(&floor(b)))
+            .or_else(|| {
+                (0..n)
+                    .filter(|&i| open(i) && trials[i].time_min.is_some_and(|t| t < tb))
+                    .min_by(|a, b| trials[*a].time_min.unwrap_or(0.0).total_cmp(&trials[*b].time_min.unwrap_or(0.0)))
+            });
+    }
+    let first = (0..n).find(|&i| open(i))?;
+    let g = trials[first].choice;
+    let members: Vec<usize> = (0..n).filter(|&i| open(i) && same_spiral(&trials[i].choice, &g)).collect();
+    let highest = || members.iter().copied().max_by(|a, b| floor(a).total_cmp(&floor(b)));
+    let mut broke: Vec<(f64, f64)> = trials
+        .iter()
+        .filter(|t| same_spiral(&t.choice, &g))
+        .filter_map(|t| t.sim.filter(|s| s.p99_deg > bound).map(|s| (t.choice.floor, s.p99_deg)))
+        .collect();
+    broke.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let [(f_lo, p_lo), (f_hi, p_hi), ..] = broke[..] else { return highest() };
+    let slope = (p_hi - p_lo) / (f_hi - f_lo);
+    if !(slope.is_finite() && slope > 0.0) {
+        return highest();
+    }
+    let at = f_lo - (p_lo - bound) / slope;
+    members
+        .iter()
+        .copied()
+        .filter(|i| floor(i) <= at + 1e-12)
+        .max_by(|a, b| floor(a).total_cmp(&floor(b)))
+        .or_else(|| members.iter().copied().min_by(|a, b| floor(a).total_cmp(&floor(b))))
+}
+
+/// The candidate planned beside `i` (planning runs [`ROUND`] candidates at once): the open
+/// floor of the same spiral next above it, else next below it.
+fn partner(trials: &[Trial], tried: &[bool], i: usize, bound: f64) -> Option<usize> {
+    let c = trials[i].choice;
+    let open: Vec<usize> = (0..trials.len())
+        .filter(|&k| {
+            k != i
+                && !tried[k]
+                && same_spiral(&trials[k].choice, &c)
+                && !trials.iter().any(|t| rules_out(t, &trials[k].choice, bound))
+        })
+        .collect();
+    let floor = |k: &usize| trials[*k].choice.floor;
+    open.iter()
+        .copied()
+        .filter(|k| floor(k) > c.floor)
+        .min_by(|a, b| floor(a).total_cmp(&floor(b)))
+        .or_else(|| open.iter().copied().filter(|k| floor(k) < c.floor).max_by(|a, b| floor(a).total_cmp(&floor(b))))
 }
 
 /// Of the simulated trials, the one that missed by least: fewest gouges, then least rest
@@ -383,6 +477,7 @@ pub(crate) fn best_fixed_zeta(cx: &Context, opts: &SpiralOptions) -> Result<Opti
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::strategy::spiral::FLOORS;
 
     fn trial(floor: f64, sim: Option<(usize, f64, f64)>) -> Trial {
         Trial {
@@ -390,6 +485,64 @@ mod tests {
             time_min: Some(1.0),
             sim: sim.map(|(gouges, rest, p99_deg)| TrialSim { gouges, rest, p99_deg, feasible: false }),
         }
+    }
+
+    /// The six floors of one spiral, planned (times rising as the floor falls) and simulated
+    /// where `p99` gives a reading (feasible when within `bound`).
+    fn floors(p99: [Option<f64>; 6], bound: f64) -> Vec<Trial> {
+        FLOORS
+            .iter()
+            .zip(p99)
+            .enumerate()
+            .map(|(i, (&floor, p))| Trial {
+                choice: SpiralChoice { zeta: None, start: None, floor },
+                time_min: Some(1.0 + i as f64),
+                sim: p.map(|p99_deg| TrialSim { gouges: 0, rest: 0.0, p99_deg, feasible: p99_deg <= bound }),
+            })
+            .collect()
+    }
+
+    /// Each step of the search on a spiral whose p99 falls as the floor does: the floors
+    /// simulated are the ones it needs, and what it chooses is the fastest feasible floor.
+    #[test]
+    fn the_search_goes_where_the_engagement_line_meets_the_bound() {
+        let all = [true; 6];
+        // the first two floors, highest first
+        assert_eq!(next_candidate(&floors([None; 6], 63.0), &[false; 6], None, 63.0), Some(0));
+        assert_eq!(
+            next_candidate(&floors([Some(114.0), None, None, None, None, None], 63.0), &all, None, 63.0),
+            Some(1)
+        );
+        // narrow_slot's readings: the line through them meets 63° below the lowest floor, so
+        // the lowest is next; when it breaks the bound too, every floor above it is ruled out
+        let t = floors([Some(113.9), Some(105.7), None, None, None, None], 63.1);
+        assert_eq!(next_candidate(&t, &all, None, 63.1), Some(5));
+        let t = floors([Some(113.9), Some(105.7), None, None, None, Some(64.6)], 63.1);
+        assert_eq!(next_candidate(&t, &all, None, 63.1), None);
+        // l_pocket's: the line meets 100° at a floor of 0.37, so 0.35 is next, and when it
+        // holds the bound the search is done (both floors above it broke it)
+        let t = floors([Some(112.5), Some(104.9), None, None, None, None], 100.0);
+        assert_eq!(next_candidate(&t, &all, None, 100.0), Some(2));
+        let t = floors([Some(112.5), Some(104.9), Some(97.4), None, None, None], 100.0);
+        assert_eq!(next_candidate(&t, &all, Some(2), 100.0), None);
+        // a step that lands lower than it had to: the open floors above the feasible one are
+        // tried, lowest first, until one breaks the bound or none is left
+        let t = floors([Some(112.5), Some(110.0), None, None, Some(90.0), None], 100.0);
+        assert_eq!(next_candidate(&t, &all, Some(4), 100.0), Some(3));
+        let t = floors([Some(112.5), Some(110.0), None, Some(99.0), Some(90.0), None], 100.0);
+        assert_eq!(next_candidate(&t, &all, Some(3), 100.0), Some(2));
+        let t = floors([Some(112.5), Some(110.0), Some(101.0), Some(99.0), Some(90.0), None], 100.0);
+        assert_eq!(next_candidate(&t, &all, Some(3), 100.0), None);
+        // a floor that could not be planned is not asked for again
+        let mut t = floors([Some(113.9), Some(105.7), None, None, None, None], 63.1);
+        t[5].time_min = None;
+        assert_eq!(next_candidate(&t, &all, None, 63.1), Some(4));
+        // planned beside a floor: the open floor next above it, else next below
+        let t = floors([Some(113.9), Some(105.7), None, None, None, None], 63.1);
+        let tried = [true, true, false, false, false, false];
+        assert_eq!(partner(&t, &tried, 5, 63.1), Some(4));
+        assert_eq!(partner(&t, &tried, 2, 63.1), Some(3));
+        assert_eq!(partner(&floors([None; 6], 63.1), &[false; 6], 0, 63.1), Some(1));
     }
 
     #[test]
