@@ -38,8 +38,11 @@ fn feed_factor(theta: f64, boost: f64) -> f64 {
 /// Splits a pass into runs of one feed multiplier (paper 1 §5: higher feed where the engagement
 /// is low, changing gradually). The engagement of each step is read off the material it
 /// removed: `cells·res² / length` is the radial depth `a` of a straight cut, `θ = acos(1 − a/R)`.
-/// The multiplier at a point is the smallest of those within one tool diameter along the pass
-/// (so the feed is back down a diameter before the engagement rises), rounded down to a tenth;
+/// The multiplier at a point is the smallest of those within one tool diameter ahead along the
+/// pass (so the feed is back down a diameter before the engagement rises, and a stretch of low
+/// engagement shorter than a diameter between two heavier ones keeps the lower feed: the
+/// smoothing §5 asks for), rounded down to a tenth; where the engagement falls the feed rises at
+/// once (the chip only thins there);
 /// `boost ≤ 1` gives one run at the programmed feed.
 fn feed_runs(pts: &[DVec2], rem: &[u32], res: f64, r: f64, d: f64, boost: f64) -> Vec<(Vec<DVec2>, f64)> {
     if boost <= 1.0 + 1e-9 || pts.len() < 2 || rem.len() != pts.len() {
@@ -56,19 +59,15 @@ fn feed_runs(pts: &[DVec2], rem: &[u32], res: f64, r: f64, d: f64, boost: f64) -
         m[i] = feed_factor(theta, boost);
     }
     m[0] = m[1];
-    // the smallest multiplier within ±d along the pass
-    let mut lo = 0;
+    // the smallest multiplier within d ahead along the pass
     let mut hi = 0;
     let mut sm = vec![1.0; n];
     for i in 0..n {
-        while s[i] - s[lo] > d {
-            lo += 1;
-        }
         hi = hi.max(i);
         while hi + 1 < n && s[hi + 1] - s[i] <= d {
             hi += 1;
         }
-        let w = m[lo..=hi].iter().copied().fold(f64::INFINITY, f64::min);
+        let w = m[i..=hi].iter().copied().fold(f64::INFINITY, f64::min);
         sm[i] = ((w * 10.0 + 1e-9).floor() / 10.0).max(1.0);
     }
     // a step takes the multiplier of its end point; runs of equal multipliers
@@ -120,5 +119,25 @@ mod tests {
         assert_eq!(*runs.last().unwrap().0.last().unwrap(), *pts.last().unwrap());
         // never above the boost, never below the programmed feed
         assert!(runs.iter().all(|(_, m)| (1.0..=1.5).contains(m)));
+    }
+
+    #[test]
+    fn feed_runs_rise_where_the_cut_ends_and_stay_down_between_close_cuts() {
+        let (res, r, d) = (0.05, 3.0, 6.0);
+        let step = 0.6;
+        let pts: Vec<DVec2> = (0..=100).map(|i| DVec2::new(i as f64 * step, 0.0)).collect();
+        let cells = (1.5 * step / (res * res)).round() as u32;
+        // cut to 20 mm, air to 40, cut from 40 to 43.2, air to 45.6 (shorter than a diameter),
+        // cut again from 45.6
+        let cutting = |x: f64| x <= 20.0 || (x > 40.0 && x <= 43.2) || x > 45.6;
+        let rem: Vec<u32> = (0..pts.len()).map(|i| if cutting(i as f64 * step) { cells } else { 0 }).collect();
+        let runs = feed_runs(&pts, &rem, res, r, d, 1.5);
+        let fast: Vec<_> = runs.iter().filter(|(_, m)| *m == 1.5).collect();
+        // one boosted run: from the step after the first cut's end, down a diameter before the
+        // second cut; the air between the second and third cuts keeps the cutting feed
+        assert_eq!(fast.len(), 1, "{runs:?}");
+        let (start, end) = (fast[0].0[0].x, fast[0].0.last().unwrap().x);
+        assert!(start <= 20.0 + 1e-9, "the feed rises at {start}, not where the cut ends");
+        assert!(end <= 40.0 - d + step + 1e-9, "{end}");
     }
 }
