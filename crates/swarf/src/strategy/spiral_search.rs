@@ -155,7 +155,7 @@ fn optimise_spiral_planned(
     let mut trials: Vec<Trial> = candidates.iter().map(|c| Trial { choice: *c, time_min: None, sim: None }).collect();
     let (d, res) = (job.cutting.tool.diameter, cx.sim.res_for(job.cutting.tool.diameter));
     let mut cells = vec![0.0; n];
-    // planned (or tried and not made), and the round of the work bound
+    // which candidates the search has planned (whether or not a spiral could be made)
     let mut tried = vec![false; n];
     let mut best: Option<usize> = None;
     let mut simulated = 0;
