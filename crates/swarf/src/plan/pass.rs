@@ -92,7 +92,15 @@ impl LayerGeom {
         };
         let centres =
             if keep.is_empty() { touch.clone() } else { touch.intersection(&regions.window.difference(&walls)) };
-        let reachable = centres.offset(r, REGION_TOL).intersection(&regions.material).without_slivers(1e-6);
+        // the material the centres reach: the regions' own where the walls are theirs and
+        // nothing is left for finishing (the centres here reach TOUCH_MARGIN further from the
+        // material than the regions', and a disk of radius r round a centre farther than r from
+        // the material reaches none of it: the same set, and an offset by the radius saved)
+        let reachable = if leave == 0.0 && regions.walls_at == wall_level {
+            regions.reachable.clone()
+        } else {
+            centres.offset(r, REGION_TOL).intersection(&regions.material).without_slivers(1e-6)
+        };
         Ok(LayerGeom {
             r,
             step: job.stepover_mm(),
@@ -123,4 +131,37 @@ impl LayerGeom {
 /// True when a ring is counter-clockwise.
 pub(crate) fn ccw(ring: &[DVec2]) -> bool {
     crate::geom::ring_area(ring) > 0.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::Area;
+
+    /// The regions' reachable material stands for the layer geometry's when the walls are the
+    /// same and nothing is left for finishing: the material the layer's centres reach (offset
+    /// by the radius, as it was computed before) is the same set (here, to the last vertex: no
+    /// area between them), on a pocket with an island and a notch (a convex and a concave wall) and on
+    /// open stock round a boss (no walls round the outside).
+    #[test]
+    fn the_layer_reaches_the_material_the_regions_reach() {
+        let pocket = Area::rect(0.0, 0.0, 40.0, 30.0).difference(&Area::rect(18.0, 0.0, 22.0, 6.0));
+        let part = Area::rect(-5.0, -5.0, 45.0, 35.0).difference(&pocket).union(&Area::disk(
+            DVec2::new(28.0, 18.0),
+            4.0,
+            0.001,
+        ));
+        let boss = Area::disk(DVec2::new(20.0, 15.0), 6.0, 0.001);
+        for (name, stock, part) in [("pocket", pocket.clone(), part), ("boss", Area::rect(0.0, 0.0, 40.0, 30.0), boss)]
+        {
+            let job = Job::new(name, stock, part, 6.0, 3.0);
+            let link = LinkOptions::DEFAULT;
+            let regions = job.regions(job.radius(), 0.01).expect("regions");
+            let geom = LayerGeom::new(&job, &regions, &link, 0.01).expect("geometry");
+            let offset = geom.centres.offset(geom.r, REGION_TOL).intersection(&regions.material).without_slivers(1e-6);
+            assert!(geom.reachable.area() > 100.0, "{name}: {}", geom.reachable.area());
+            let apart = geom.reachable.difference(&offset).area() + offset.difference(&geom.reachable).area();
+            assert!(apart.abs() < 1e-6 * offset.area(), "{name}: {apart} mm² apart of {}", offset.area());
+        }
+    }
 }
