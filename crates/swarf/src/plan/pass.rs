@@ -84,19 +84,16 @@ impl LayerGeom {
         let keep = if leave > 0.0 { regions.keep.offset(leave, REGION_TOL) } else { regions.keep.clone() };
         let wall_level = r + wall_margin;
         let touch = regions.material.offset(r + TOUCH_MARGIN, REGION_TOL);
-        // (the regions have it when nothing is left for finishing)
-        let walls = if leave == 0.0 && regions.walls_at == wall_level {
-            regions.walls.clone()
-        } else {
-            keep.offset(wall_level, REGION_TOL)
-        };
+        // the regions' walls are the layer's when nothing is left for finishing
+        let regions_walls = leave == 0.0 && regions.walls_at == wall_level;
+        let walls = if regions_walls { regions.walls.clone() } else { keep.offset(wall_level, REGION_TOL) };
         let centres =
             if keep.is_empty() { touch.clone() } else { touch.intersection(&regions.window.difference(&walls)) };
-        // the material the centres reach: the regions' own where the walls are theirs and
-        // nothing is left for finishing (the centres here reach TOUCH_MARGIN further from the
-        // material than the regions', and a disk of radius r round a centre farther than r from
-        // the material reaches none of it: the same set, and an offset by the radius saved)
-        let reachable = if leave == 0.0 && regions.walls_at == wall_level {
+        // the material the centres reach: the regions' own where the walls are theirs (the
+        // centres here reach TOUCH_MARGIN further from the material than the regions', and a
+        // disk of radius r round a centre farther than r from the material reaches none of it:
+        // the same set, and an offset by the radius saved)
+        let reachable = if regions_walls {
             regions.reachable.clone()
         } else {
             centres.offset(r, REGION_TOL).intersection(&regions.material).without_slivers(1e-6)
@@ -141,8 +138,8 @@ mod tests {
     /// The regions' reachable material stands for the layer geometry's when the walls are the
     /// same and nothing is left for finishing: the material the layer's centres reach (offset
     /// by the radius, as it was computed before) is the same set (here, to the last vertex: no
-    /// area between them), on a pocket with an island and a notch (a convex and a concave wall) and on
-    /// open stock round a boss (no walls round the outside).
+    /// area between them), on a pocket with an island and a notch (a convex and a concave
+    /// wall) and on open stock round a boss (no walls round the outside).
     #[test]
     fn the_layer_reaches_the_material_the_regions_reach() {
         let pocket = Area::rect(0.0, 0.0, 40.0, 30.0).difference(&Area::rect(18.0, 0.0, 22.0, 6.0));

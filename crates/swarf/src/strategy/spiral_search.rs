@@ -162,16 +162,12 @@ fn optimise_spiral_planned(
     let mut swept = 0.0;
     let mut stopped = false;
     while let Some(i) = next_candidate(&trials, &tried, best, bound) {
-        if simulated == MAX_SIMULATED {
+        // at most MAX_SIMULATED simulations, and a new round planned only within the work bound
+        if simulated == MAX_SIMULATED || (!tried[i] && swept >= opts.search_cells) {
             stopped = best.is_none();
             break;
         }
         if !tried[i] {
-            // a new round: planned only within the work bound
-            if swept >= opts.search_cells {
-                stopped = best.is_none();
-                break;
-            }
             let round = [Some(i), partner(&trials, &tried, i, bound)];
             let round: Vec<usize> = round.into_iter().flatten().collect();
             let t0 = std::time::Instant::now();

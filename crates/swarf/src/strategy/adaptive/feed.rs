@@ -94,17 +94,28 @@ mod tests {
         assert_eq!(feed_factor(10f64.to_radians(), 1.6), 1.6);
     }
 
+    /// Cells of 0.05 mm, a tool of radius 3 (diameter 6), steps of 0.6 mm.
+    const RES: f64 = 0.05;
+    const R: f64 = 3.0;
+    const STEP: f64 = 0.6;
+
+    /// A straight pass along x of `n` steps, each cutting at radial depth 1.5 mm (θ 60°) where
+    /// `cutting` says of its end, else nothing: its points and the cells each step removed.
+    fn straight(n: usize, cutting: impl Fn(f64) -> bool) -> (Vec<DVec2>, Vec<u32>) {
+        let pts: Vec<DVec2> = (0..=n).map(|i| DVec2::new(i as f64 * STEP, 0.0)).collect();
+        let cells = (1.5 * STEP / (RES * RES)).round() as u32;
+        let rem = pts.iter().map(|p| if cutting(p.x) { cells } else { 0 }).collect();
+        (pts, rem)
+    }
+
     #[test]
     fn feed_runs_rise_in_air_and_come_down_a_diameter_before_the_cut() {
-        // a straight pass: 20 mm of air, then 20 mm at radial depth 1.5 mm (R 3, θ 60°)
-        let (res, r, d) = (0.05, 3.0, 6.0);
-        let step = 0.6;
-        let pts: Vec<DVec2> = (0..=66).map(|i| DVec2::new(i as f64 * step, 0.0)).collect();
-        let cells = (1.5 * step / (res * res)).round() as u32;
-        let rem: Vec<u32> = (0..pts.len()).map(|i| if i as f64 * step > 20.0 { cells } else { 0 }).collect();
-        let runs = feed_runs(&pts, &rem, res, r, d, 1.5);
+        // 20 mm of air, then 20 mm of cut
+        let (d, step) = (2.0 * R, STEP);
+        let (pts, rem) = straight(66, |x| x > 20.0);
+        let runs = feed_runs(&pts, &rem, RES, R, d, 1.5);
         // off: one run at the programmed feed
-        assert_eq!(feed_runs(&pts, &rem, res, r, d, 1.0).len(), 1);
+        assert_eq!(feed_runs(&pts, &rem, RES, R, d, 1.0).len(), 1);
         // the air gets the full boost, the cut 1 / sin 60° = 1.155 rounded down to 1.15
         assert_eq!(runs.first().unwrap().1, 1.5);
         assert_eq!(runs.last().unwrap().1, 1.15);
@@ -123,15 +134,11 @@ mod tests {
 
     #[test]
     fn feed_runs_rise_where_the_cut_ends_and_stay_down_between_close_cuts() {
-        let (res, r, d) = (0.05, 3.0, 6.0);
-        let step = 0.6;
-        let pts: Vec<DVec2> = (0..=100).map(|i| DVec2::new(i as f64 * step, 0.0)).collect();
-        let cells = (1.5 * step / (res * res)).round() as u32;
+        let (d, step) = (2.0 * R, STEP);
         // cut to 20 mm, air to 40, cut from 40 to 43.2, air to 45.6 (shorter than a diameter),
         // cut again from 45.6
-        let cutting = |x: f64| x <= 20.0 || (x > 40.0 && x <= 43.2) || x > 45.6;
-        let rem: Vec<u32> = (0..pts.len()).map(|i| if cutting(i as f64 * step) { cells } else { 0 }).collect();
-        let runs = feed_runs(&pts, &rem, res, r, d, 1.5);
+        let (pts, rem) = straight(100, |x| x <= 20.0 || (x > 40.0 && x <= 43.2) || x > 45.6);
+        let runs = feed_runs(&pts, &rem, RES, R, d, 1.5);
         let fast: Vec<_> = runs.iter().filter(|(_, m)| *m == 1.5).collect();
         // one boosted run: from the step after the first cut's end, down a diameter before the
         // second cut; the air between the second and third cuts keeps the cutting feed
