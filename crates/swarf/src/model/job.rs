@@ -194,8 +194,12 @@ impl Job {
         let walls_at = r + margin.max(0.0);
         let walls = keep.offset(walls_at, REGION_TOL);
         let centres = window.difference(&walls);
-        // centres that matter: the tool touches material
-        let touching = centres.intersection(&material.offset(r, REGION_TOL));
+        // centres that matter: the tool touches material. A centre is farther than `r` from the
+        // keep, so a point of the stock within `r` of it is material: the stock grown by `r`
+        // says the same as the material grown by it, and the stock's outline is a few edges
+        // where the material's holds every curve of the drawing (a growth of them all by the
+        // radius, shut round thin features, was a tenth of a drawing's planning)
+        let touching = centres.intersection(&self.stock.offset(r, REGION_TOL));
         let reachable = touching.offset(r, REGION_TOL).intersection(&material).without_slivers(1e-6);
         if material.is_empty() {
             return Err(Error::job(
@@ -286,5 +290,30 @@ mod tests {
         assert!(e.contains("does not fit") && e.contains("the widest place is 4.0"), "{e}");
         assert!(e.contains("--tool-diameter"), "{e}");
         assert!(job.regions(1.9, 0.0).is_ok());
+    }
+
+    /// The reachable material is the material within a radius of the centres, whatever the
+    /// centres are first narrowed to (those within a radius of the stock): on a plate whose
+    /// part is a wavy boss, an island and a wall that runs out of the stock and past its
+    /// corner, the two leave no area between them.
+    #[test]
+    fn the_reachable_material_is_what_the_centres_reach() {
+        let stock = Area::rect(0.0, 0.0, 80.0, 50.0);
+        let boss: Vec<DVec2> = (0..720)
+            .map(|k| {
+                let a = std::f64::consts::TAU * k as f64 / 720.0;
+                DVec2::new(25.0, 25.0) + (9.0 + 1.5 * (6.0 * a).sin()) * DVec2::new(a.cos(), a.sin())
+            })
+            .collect();
+        let part = Area::from_rings(&[boss], crate::geom::area::Fill::NonZero)
+            .union(&Area::rect(55.0, 20.0, 62.0, 30.0))
+            .union(&Area::rect(70.0, 35.0, 95.0, 60.0));
+        let job = Job::new("plate", stock, part, 8.0, 3.0);
+        let (r, margin) = (job.radius(), 0.005);
+        let g = job.regions(r, margin).unwrap();
+        let direct = g.centres.offset(r, REGION_TOL).intersection(&g.material);
+        let between = direct.difference(&g.reachable).area() + g.reachable.difference(&direct).area();
+        assert!(between < 0.01, "{between} mm² between them");
+        assert!(g.reachable.area() > 0.9 * g.material.area(), "{} of {}", g.reachable.area(), g.material.area());
     }
 }
