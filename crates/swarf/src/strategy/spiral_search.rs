@@ -318,9 +318,9 @@ fn partner(trials: &[Trial], tried: &[bool], i: usize, bound: f64) -> Option<usi
 }
 
 /// Of the simulated trials, the one that missed by least: fewest gouges, then least rest
-/// beyond [`REST_LIMIT`] in steps of [`REST_STEP`], then least p99 engagement beyond `bound`
-/// (rest within the limit, or within a step of another's, is not traded against engagement).
-/// The first of equals.
+/// beyond [`REST_LIMIT`] counted in whole steps of [`REST_STEP`] (rounded), then least p99
+/// engagement beyond `bound` (rest within the limit, or in the same step as another's, is not
+/// traded against engagement). The first of equals.
 fn nearest_miss(trials: &[Trial], bound: f64) -> Option<usize> {
     let miss = |i: usize| {
         trials[i].sim.map(|s| {
