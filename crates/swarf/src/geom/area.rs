@@ -446,6 +446,9 @@ mod tests {
         let a = Area::from_rings(std::slice::from_ref(&ring), Fill::NonZero);
         let idx = EdgeIndex::from_rings([&ring].into_iter(), 2.0);
         let tol = 0.001;
+        let mut closed = ring.clone();
+        closed.push(ring[0]);
+        let perimeter = crate::geom::polyline_length(&closed);
         for d in [1.5, -1.5, 0.002, -0.002] {
             let e = a.offset(d, tol);
             let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
@@ -462,9 +465,6 @@ mod tests {
             assert!(hi <= d.abs() + 2.0 * tol, "offset {d}: a point of the result {hi} from the boundary");
             // Steiner's formula: the area grows by the perimeter times d, and by π·d² round the
             // boundary's turn (a shrink keeps the four corners sharp: about 4·d² instead)
-            let mut closed = ring.clone();
-            closed.push(ring[0]);
-            let perimeter = crate::geom::polyline_length(&closed);
             let want = a.area() + d * perimeter + d * d * if d > 0.0 { std::f64::consts::PI } else { 4.0 };
             assert!((e.area() - want).abs() < 0.5, "offset {d}: {} against {want}", e.area());
         }

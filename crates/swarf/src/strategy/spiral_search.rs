@@ -571,7 +571,7 @@ mod tests {
         assert_eq!(nearest_miss(&t, 70.0), Some(1));
         let t = [trial(0.5, Some((2, 0.0, 60.0))), trial(0.35, Some((1, 0.02, 99.0)))];
         assert_eq!(nearest_miss(&t, 70.0), Some(1));
-        // rests beyond the limit within a step of each other are equal: the engagement decides
+        // rests beyond the limit that round to the same step are equal: the engagement decides
         // (narrow_slot's highest and lowest floors)
         let t = [trial(0.5, Some((0, 0.020343, 113.8))), trial(0.16, Some((0, 0.020412, 64.4)))];
         assert_eq!(nearest_miss(&t, 63.1), Some(1));
