@@ -24,6 +24,30 @@ use super::route;
 
 /// Keeps the strategy's order, except that clean-up passes of one level are visited nearest
 /// first.
+/// Puts into the closed loop `pts` (its last point not repeating its first) a vertex at its
+/// point nearest `p`, unless that point is within a micrometre of a vertex.
+fn insert_nearest(pts: &mut Vec<DVec2>, p: DVec2) {
+    let n = pts.len();
+    if n < 2 {
+        return;
+    }
+    let mut best = (f64::INFINITY, 0, pts[0]);
+    for k in 0..n {
+        let (a, b) = (pts[k], pts[(k + 1) % n]);
+        let ab = b - a;
+        let t = if ab.length_squared() > 0.0 { ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+        let q = a + ab * t;
+        let d = (q - p).length_squared();
+        if d < best.0 {
+            best = (d, k, q);
+        }
+    }
+    let (_, k, q) = best;
+    if (q - pts[k]).length() > 1e-3 && (q - pts[(k + 1) % n]).length() > 1e-3 {
+        pts.insert(k + 1, q);
+    }
+}
+
 pub(crate) fn order(passes: &[Pass], from: DVec2) -> Vec<Pass> {
     let mut out = Vec::with_capacity(passes.len());
     let mut cur = from;
@@ -552,6 +576,11 @@ impl<'a, M: Material> Linker<'a, M> {
             }
         }
         if pass.closed {
+            if self.down_at == Some(z) {
+                // down already: the loop starts at its nearest point to the tool, a vertex put
+                // there if it falls on an edge (a loop's vertices may lie a wall's length apart)
+                insert_nearest(&mut pts, cur.truncate());
+            }
             let k = self.pick_start(&pts, z, cur);
             pts.rotate_left(k);
             pts.push(pts[0]);
@@ -1186,6 +1215,52 @@ mod tests {
             assert_eq!(noted(&l, "helix"), bound, "bound {bound}: {:?}", l.tp.notes);
             assert_eq!(count(&l.tp.moves, MoveKind::Plunge), 0);
         }
+    }
+
+    /// The tool down on a closed clean-up loop, midway along an edge 16 mm long, with stock
+    /// left along the walls: the loop starts where the tool stands, and the pass is the loop
+    /// alone, cut all round once (not a link at depth or a retract to a vertex 8 mm away
+    /// first).
+    #[test]
+    fn a_loop_reached_down_on_it_starts_where_the_tool_stands() {
+        let p = Pocket::new(20.0, 10.0);
+        let z = p.z();
+        let here = DVec2::new(10.0, 2.0);
+        let mut l = p.linker(here);
+        clear_row(&mut l, z, 2.0, 6.0, 14.0);
+        stand_at(&mut l, here, z);
+        let n = l.tp.moves.len();
+        let corners = vec![DVec2::new(2.0, 2.0), DVec2::new(18.0, 2.0), DVec2::new(18.0, 8.0), DVec2::new(2.0, 8.0)];
+        let pass = Pass { pts: corners, closed: true, kind: PassKind::Cleanup, level: 0.0, reversible: true };
+        l.pass(pass, z);
+        let moves = &l.tp.moves[n..];
+        // (cut, and linked through the cleared stretch of the row)
+        assert!(moves.iter().all(|m| matches!(m.kind, MoveKind::Cut | MoveKind::Link) && m.to.z == z), "{moves:?}");
+        let mut at = here.extend(z);
+        let mut length = 0.0;
+        for m in moves {
+            length += (m.to - at).length();
+            at = m.to;
+        }
+        assert!((length - 44.0).abs() < 1e-9, "{length} mm: {moves:?}");
+        assert_eq!(at, here.extend(z));
+    }
+
+    #[test]
+    fn the_nearest_point_of_a_loop_becomes_a_vertex_unless_it_is_one() {
+        let square = vec![DVec2::ZERO, DVec2::new(4.0, 0.0), DVec2::new(4.0, 4.0), DVec2::new(0.0, 4.0)];
+        let mut pts = square.clone();
+        insert_nearest(&mut pts, DVec2::new(1.0, -3.0));
+        assert_eq!(pts[1], DVec2::new(1.0, 0.0));
+        assert_eq!(pts.len(), 5);
+        // on the closing edge, from the last vertex back to the first
+        let mut pts = square.clone();
+        insert_nearest(&mut pts, DVec2::new(-1.0, 2.5));
+        assert_eq!(pts[4], DVec2::new(0.0, 2.5));
+        // at a vertex (within a micrometre): unchanged
+        let mut pts = square.clone();
+        insert_nearest(&mut pts, DVec2::new(4.0 + 1e-4, 4.0 + 2.0));
+        assert_eq!(pts, square);
     }
 
     /// A linker made after [`stream_next_program`] sends its moves in pieces of

@@ -182,7 +182,12 @@ impl<'a, F: FnMut(&mut Linker<'a>, f64)> Levels<'a> for AdaptiveLevels<'_, F> {
             return Ok(());
         }
         l.tp.note(format!("clean-up at z {z:.3}"));
-        l.down_at = None;
+        // (a tool still down at the level where the passes ended goes on from there: the
+        // clean-up's first pass starts at its nearest point and is reached sideways if the
+        // way is clear or short, as between passes)
+        if (l.tp.end().z - z).abs() > 1e-9 {
+            l.down_at = None;
+        }
         for p in crate::plan::linker::order(&extra, l.tp.end().truncate()) {
             l.pass(p, z);
         }
