@@ -376,7 +376,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
                     // the material, when that is possible
                     {
                         let (_, t) = self.c.walls.at(ring, s);
-                        let dir = self.contour_direction(q, t, st.alpha);
+                        let dir = self.contour_direction(ring, s, q, t, st.alpha);
                         let (n, t2) = self.c.walls.at(ring, s + dir * self.c.step);
                         let e = self.l.sim.front_engagement(n, z, t2 * dir);
                         // and the step onto the wall must not be heavy either, at its end or
@@ -409,7 +409,7 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
                     }
                     st.air = 0.0;
                     let (_, t) = self.c.walls.at(ring, s);
-                    let dir = self.contour_direction(st.c, t, st.alpha);
+                    let dir = self.contour_direction(ring, s, st.c, t, st.alpha);
                     st.mode = Mode::Contour { ring, s, dir, walked: 0.0 };
                     st.alpha = (t * dir).y.atan2((t * dir).x);
                 }
@@ -491,10 +491,31 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
         }
     }
 
-    /// Which way to follow the contour with tangent `t` at `c`: the way that has the material
-    /// on the milling side (the right for climb), so the milling type is kept along the wall
-    /// too; on a tie, the way closer to the heading `alpha`.
-    pub(super) fn contour_direction(&mut self, c: DVec2, t: DVec2, alpha: f64) -> f64 {
+    /// Which way to follow the contour `ring` from arc length `s` (the point `c`, tangent `t`):
+    /// the only way with material along the wall within a tool radius, if one way has it
+    /// within the contour's slack over the reference and the other has none (a pass that
+    /// reaches the wall beside cusps the passes before it left there clears them along it,
+    /// rather than walking off into cleared space and leaving them each to a pass of its own);
+    /// else the way that has the material on the milling side (the right for climb), so the
+    /// milling type is kept along the wall too; on a tie, the way closer to the heading
+    /// `alpha`.
+    pub(super) fn contour_direction(&mut self, ring: usize, s: f64, c: DVec2, t: DVec2, alpha: f64) -> f64 {
+        // (the largest engagement along the wall within a radius each way)
+        let ahead = |e: &Self, dir: f64| {
+            let n = (e.c.r / e.c.step).ceil().max(1.0) as usize;
+            (1..=n)
+                .map(|k| {
+                    let (q, tq) = e.c.walls.at(ring, s + dir * k as f64 * e.c.step);
+                    e.l.sim.front_engagement(q, e.z, tq * dir)
+                })
+                .fold(0.0, f64::max)
+        };
+        let light = |e: f64| e > 0.0 && e <= self.c.theta + self.switch_slack();
+        match (ahead(self, 1.0), ahead(self, -1.0)) {
+            (a, b) if light(a) && b <= 0.0 => return 1.0,
+            (a, b) if a <= 0.0 && light(b) => return -1.0,
+            _ => {}
+        }
         let mut flags = std::mem::take(&mut self.flags);
         self.l.sim.ring_material(c, self.z, &mut flags);
         let ring = self.l.sim.ring();
@@ -695,6 +716,41 @@ mod tests {
                 assert!((st.c.y - on_wall).abs() < 0.005, "climb {climb}, step {k}: {:?}", st.c);
                 assert!((st.c.x - before.0.x - way * c.step).abs() < 1e-9, "climb {climb}, step {k}: {:?}", st.c);
                 assert!(e.l.sim.reach_left() < before.1, "climb {climb}, step {k}: nothing cut");
+            }
+        }
+    }
+
+    /// The band along the top wall of the previous test cleared by the tool coming along the
+    /// wall from the left to x = 12 and left to the right of it, the tool there with its
+    /// heading to the left (the way the milling side ties to): the contour goes right, along
+    /// the band, which it cuts at no more than the reference and its slack, not left into
+    /// cleared space (the band would then be left to passes of its own). With the band
+    /// cleared both ways, the heading decides.
+    #[test]
+    fn the_contour_goes_the_way_the_wall_still_has_material() {
+        let p = Pocket::new(true);
+        let z = p.z();
+        let on_wall = 10.0 - p.geom.wall_level;
+        for band in [true, false] {
+            let mut l = p.linker();
+            for y in [-0.4, 1.6, 3.6, 5.6, 7.6] {
+                clear_row(&mut l, z, y, -3.0, 23.0);
+            }
+            // (the tool came along the wall from the left)
+            clear_row(&mut l, z, on_wall, -3.0, if band { 12.0 } else { 23.0 });
+            let c = p.setup(&l);
+            let mut e = engine(&mut l, &c, z);
+            let at = DVec2::new(12.0, on_wall);
+            let (ring, s, q) = e.c.walls.project(at, 1.0).expect("the wall's contour");
+            assert!((q - at).length() < 0.01, "{q:?}");
+            let (_, t) = e.c.walls.at(ring, s);
+            let dir = e.contour_direction(ring, s, q, t, PI);
+            let way = (t * dir).x;
+            assert!((way.abs() - 1.0).abs() < 1e-6, "{t:?}");
+            assert_eq!(way > 0.0, band, "band {band}: the contour goes {way}");
+            if band {
+                let e_band = e.l.sim.front_engagement(q + DVec2::new(c.step, 0.0), z, DVec2::X);
+                assert!(e_band > 0.0 && e_band <= c.theta + e.switch_slack(), "{e_band}°");
             }
         }
     }
