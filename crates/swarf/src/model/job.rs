@@ -295,7 +295,9 @@ mod tests {
     /// The reachable material is the material within a radius of the centres, whatever the
     /// centres are first narrowed to (those within a radius of the stock): on a plate whose
     /// part is a wavy boss, an island and a wall that runs out of the stock and past its
-    /// corner, the two leave no area between them.
+    /// corner, the two leave no area between them; and on a plate crossed by a bar of part
+    /// just under its edge, the strip beyond the bar is reached from centres more than half a
+    /// radius outside the stock (narrowing them to half a radius left it unreached).
     #[test]
     fn the_reachable_material_is_what_the_centres_reach() {
         let stock = Area::rect(0.0, 0.0, 80.0, 50.0);
@@ -315,5 +317,16 @@ mod tests {
         let between = direct.difference(&g.reachable).area() + g.reachable.difference(&direct).area();
         assert!(between < 0.01, "{between} mm² between them");
         assert!(g.reachable.area() > 0.9 * g.material.area(), "{} of {}", g.reachable.area(), g.material.area());
+        // A bar of part right across the plate 1.5 mm under its top edge: the strip of material
+        // above it is reached only from centres 2.5 mm outside the stock (the radius above the
+        // bar), farther out than half a radius.
+        let bar = Area::rect(-10.0, 45.0, 90.0, 48.5);
+        let job = Job::new("bar", Area::rect(0.0, 0.0, 80.0, 50.0), bar, 8.0, 3.0);
+        let g = job.regions(job.radius(), margin).unwrap();
+        let strip = g.reachable.intersection(&Area::rect(0.0, 48.5, 80.0, 50.0)).area();
+        assert!((strip - 120.0).abs() < 0.5, "{strip} mm² of the strip reached");
+        let direct = g.centres.offset(r, REGION_TOL).intersection(&g.material);
+        let between = direct.difference(&g.reachable).area() + g.reachable.difference(&direct).area();
+        assert!(between < 0.01, "{between} mm² between them");
     }
 }
