@@ -22,8 +22,6 @@ use crate::toolpath::{MoveKind, Toolpath};
 
 use super::route;
 
-/// Keeps the strategy's order, except that clean-up passes of one level are visited nearest
-/// first.
 /// Puts into the closed loop `pts` (its last point not repeating its first) a vertex at its
 /// point nearest `p`, unless that point is within a micrometre of a vertex.
 fn insert_nearest(pts: &mut Vec<DVec2>, p: DVec2) {
@@ -48,6 +46,8 @@ fn insert_nearest(pts: &mut Vec<DVec2>, p: DVec2) {
     }
 }
 
+/// Keeps the strategy's order, except that clean-up passes of one level are visited nearest
+/// first.
 pub(crate) fn order(passes: &[Pass], from: DVec2) -> Vec<Pass> {
     let mut out = Vec::with_capacity(passes.len());
     let mut cur = from;
@@ -1246,6 +1246,7 @@ mod tests {
         assert_eq!(at, here.extend(z));
     }
 
+    /// A point beside an edge of a square, beside its closing edge, and near a corner.
     #[test]
     fn the_nearest_point_of_a_loop_becomes_a_vertex_unless_it_is_one() {
         let square = vec![DVec2::ZERO, DVec2::new(4.0, 0.0), DVec2::new(4.0, 4.0), DVec2::new(0.0, 4.0)];
