@@ -8,9 +8,12 @@
 //! - `levels`: the level driver (one linker for the whole program, the levels top down, the
 //!   finishing contours);
 //! - `route`: ways at depth round the material through cleared space;
+//! - `feed`: the feed of paper 1 §5 (chip thinning), for the adaptive strategy's passes and
+//!   its clean-up;
 //! - `pass`: passes, their kinds, the geometry of a level;
 //! - [`LinkOptions`]: what every strategy shares.
 
+pub(crate) mod feed;
 pub(crate) mod levels;
 pub(crate) mod linker;
 pub(crate) mod material;

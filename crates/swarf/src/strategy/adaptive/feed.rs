@@ -5,9 +5,9 @@
 use super::engine::Engine;
 use crate::geom::simplify::douglas_peucker;
 use crate::geom::{DVec2, polyline_length};
+use crate::plan::feed::{feed_factor, smoothed_runs};
 use crate::plan::{DP_TOL, Material};
 use crate::toolpath::MoveKind;
-use std::f64::consts::FRAC_PI_2;
 
 impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
     /// Simplifies, arc-fits and appends the pass (the material was cut step by step already),
@@ -28,13 +28,6 @@ impl<'a, 'b, M: Material> Engine<'a, 'b, M> {
     }
 }
 
-/// Feed multiplier for engagement `theta` (radians) with the boost limit `boost`: chip thinning
-/// — below 90° the thickest chip of a flat end mill is `f_z·sin θ` — is made up by `1 / sin θ`,
-/// up to `boost`; air gets `boost`.
-fn feed_factor(theta: f64, boost: f64) -> f64 {
-    if theta >= FRAC_PI_2 { 1.0 } else { (1.0 / theta.sin().max(1e-9)).min(boost).max(1.0) }
-}
-
 /// Splits a pass into runs of one feed multiplier (paper 1 §5: higher feed where the engagement
 /// is low, changing gradually). The engagement of each step is read off the material it
 /// removed: `cells·res² / length` is the radial depth `a` of a straight cut, `θ = acos(1 − a/R)`.
@@ -49,41 +42,20 @@ fn feed_runs(pts: &[DVec2], rem: &[u32], res: f64, r: f64, d: f64, boost: f64) -
         return vec![(pts.to_vec(), 1.0)];
     }
     let n = pts.len();
-    let mut s = vec![0.0; n];
     let mut m = vec![1.0; n];
     for i in 1..n {
         let len = (pts[i] - pts[i - 1]).length();
-        s[i] = s[i - 1] + len;
         let a = if len > 1e-9 { rem[i] as f64 * res * res / len } else { 0.0 };
         let theta = (1.0 - (a / r).min(2.0)).clamp(-1.0, 1.0).acos();
         m[i] = feed_factor(theta, boost);
     }
-    m[0] = m[1];
-    // the smallest multiplier within d ahead along the pass
-    let mut hi = 0;
-    let mut sm = vec![1.0; n];
-    for i in 0..n {
-        hi = hi.max(i);
-        while hi + 1 < n && s[hi + 1] - s[i] <= d {
-            hi += 1;
-        }
-        let w = m[i..=hi].iter().copied().fold(f64::INFINITY, f64::min);
-        sm[i] = ((w * 20.0 + 1e-9).floor() / 20.0).max(1.0);
-    }
-    // a step takes the multiplier of its end point; runs of equal multipliers
-    let mut out: Vec<(Vec<DVec2>, f64)> = Vec::new();
-    for i in 1..n {
-        match out.last_mut() {
-            Some((run, f)) if *f == sm[i] => run.push(pts[i]),
-            _ => out.push((vec![pts[i - 1], pts[i]], sm[i])),
-        }
-    }
-    out
+    smoothed_runs(pts, m, d)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::FRAC_PI_2;
 
     #[test]
     fn feed_factor_makes_up_chip_thinning_within_the_boost() {

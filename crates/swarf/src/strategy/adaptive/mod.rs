@@ -154,6 +154,8 @@ impl<'a, F: FnMut(&mut Linker<'a>, f64)> Levels<'a> for AdaptiveLevels<'_, F> {
         l.clear_margin = 0.75 * l.sim.grid.res;
         // the clean-up's entries hold the bound the passes are held to
         l.entry_bound = Some(self.job.cutting.width.engagement_deg() + crate::report::BOUND_OVER_REF_DEG);
+        // and their cutting is fed as the passes are (§5)
+        l.thinned_feed = true;
         self.setup = Some(Setup::new(l, self.job, self.geom, self.opts));
         Ok(())
     }
